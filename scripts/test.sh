@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# The README's test command: installs dependencies, builds, runs the default test suite.
+# The slow statistical checks carry the CTest label "long"; run them with: ctest --test-dir build -L long
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup-debian.sh
+bash scripts/build.sh
+ctest --test-dir build -LE long --output-on-failure -j "$(nproc)"
