@@ -1,0 +1,89 @@
+#include "cli_common.hpp"
+
+#include <charconv>
+#include <functional>
+#include <iostream>
+#include <sstream>
+
+#include "io/atomic_file.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::cli {
+
+void SiteFlags::add_to(po::options_description& desc) {
+  desc.add_options()
+      ("envelopment", po::value(&envelopment_m)->default_value(envelopment_m),
+       "tyre envelopment: moving-average base length along travel (m); 0 = off")
+      ("sensors", po::value(&sensors)->default_value(sensors),
+       "sensor array as FIRST_M,SPACING_M,COUNT")
+      ("m1", po::value(&m1_kg)->default_value(m1_kg), "unsprung mass m1 (kg)")
+      ("cb", po::value(&cb_nspm)->default_value(cb_nspm), "suspension damping c_b (N s/m)")
+      ("ct", po::value(&ct_nspm)->default_value(ct_nspm), "tyre damping c_t (N s/m); 0 in the paper");
+}
+
+site::SiteOptions SiteFlags::to_options() const {
+  site::SiteOptions o;
+  o.envelopment_m = envelopment_m;
+  o.unsprung_mass_kg = m1_kg;
+  o.suspension_damping_nspm = cb_nspm;
+  o.tyre_damping_nspm = ct_nspm;
+  std::stringstream ss(sensors);
+  std::string a, b, c;
+  if (!std::getline(ss, a, ',') || !std::getline(ss, b, ',') || !std::getline(ss, c) ) {
+    throw UsageError("--sensors '" + sensors + "': expected FIRST_M,SPACING_M,COUNT, e.g. 76,1.5,16");
+  }
+  try {
+    std::size_t used = 0;
+    o.sensors.first_m = std::stod(a, &used);
+    if (used != a.size()) throw std::invalid_argument(a);
+    o.sensors.spacing_m = std::stod(b, &used);
+    if (used != b.size()) throw std::invalid_argument(b);
+    o.sensors.count = std::stoi(c, &used);
+    if (used != c.size()) throw std::invalid_argument(c);
+  } catch (const std::logic_error&) {
+    throw UsageError("--sensors '" + sensors + "': expected FIRST_M,SPACING_M,COUNT, e.g. 76,1.5,16");
+  }
+  o.validate();
+  return o;
+}
+
+bool parse_or_help(int argc, const char* const argv[], const po::options_description& desc,
+                   const po::positional_options_description* positional, po::variables_map& vm,
+                   const std::string& usage_line) {
+  try {
+    po::command_line_parser parser(argc, argv);
+    parser.options(desc);
+    if (positional) parser.positional(*positional);
+    po::store(parser.run(), vm);
+    if (vm.count("help")) {
+      std::cout << usage_line << "\n\n" << desc << "\n";
+      return false;
+    }
+    po::notify(vm);
+  } catch (const po::error& e) {
+    throw UsageError(std::string(e.what()) + " (see --help)");
+  }
+  return true;
+}
+
+std::uint64_t parse_seed(const std::string& text, const std::string& option) {
+  std::uint64_t value = 0;
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (text.empty() || ec != std::errc() || ptr != end) {
+    throw UsageError(option + " '" + text + "' is not a whole number in [0, 2^64)");
+  }
+  return value;
+}
+
+void write_output(const std::string& path, const std::function<void(std::ostream&)>& write) {
+  if (path.empty() || path == "-") {
+    write(std::cout);
+    std::cout.flush();
+    if (!std::cout) throw IoError("writing to standard output failed");
+    return;
+  }
+  io::write_file_atomically(path, write);
+}
+
+}  // namespace ssrfleet::cli

@@ -1,0 +1,42 @@
+// Pieces every subcommand shares: option groups for the site, parsing helpers, output helpers.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include <boost/program_options.hpp>
+
+#include "site/site.hpp"
+
+namespace ssrfleet::cli {
+
+namespace po = boost::program_options;
+
+// Options that define a site: --envelopment, --sensors, --m1, --cb, --ct.
+struct SiteFlags {
+  double envelopment_m = 0.3;
+  std::string sensors = "76,1.5,16";
+  double m1_kg = 420.0;
+  double cb_nspm = 20e3;
+  double ct_nspm = 0.0;
+
+  void add_to(po::options_description& desc);
+  site::SiteOptions to_options() const;  // UsageError on a malformed --sensors
+};
+
+// Parses argv with desc (and positional names), turning program_options errors into
+// UsageError. Returns false if --help was given (help already printed to stdout).
+bool parse_or_help(int argc, const char* const argv[], const po::options_description& desc,
+                   const po::positional_options_description* positional, po::variables_map& vm,
+                   const std::string& usage_line);
+
+// Parses a seed: a whole number in [0, 2^64). Anything else is a UsageError naming the option.
+std::uint64_t parse_seed(const std::string& text, const std::string& option = "--seed");
+
+// Writes through `write` to `path` atomically, or to stdout when path is "-" or empty.
+void write_output(const std::string& path, const std::function<void(std::ostream&)>& write);
+
+}  // namespace ssrfleet::cli

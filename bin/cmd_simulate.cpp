@@ -1,0 +1,96 @@
+// ssrfleet simulate: a fleet (drawn from distributions, or an explicit truck list) over a road,
+// written as a WIM log.
+#include <algorithm>
+#include <cctype>
+#include <iostream>
+#include <string>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "fleet/fleet_distribution.hpp"
+#include "fleet/simulator.hpp"
+#include "io/truck_list_csv.hpp"
+#include "io/wim_log.hpp"
+#include "site/road_source.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::cli {
+
+namespace {
+bool is_count(const std::string& s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
+}
+}  // namespace
+
+int run_simulate(int argc, const char* const argv[]) {
+  std::string road = "AS1", trucks_arg = "100", out = "-", truth, seed_text = "1";
+  double noise = 0.02;
+  bool quiet = false;
+  SiteFlags site_flags;
+  fleet::FleetDistribution dist;
+  po::options_description desc("simulate options");
+  desc.add_options()
+      ("help,h", "show this help")
+      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3 or a road CSV file")
+      ("trucks", po::value(&trucks_arg)->default_value(trucks_arg),
+       "number of trucks to draw from the fleet distribution, or a truck-list CSV file")
+      ("noise", po::value(&noise)->default_value(noise), "measurement noise sd sigma_IF; 0 = exact model output")
+      ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (fleet draw and noise)")
+      ("out,o", po::value(&out)->default_value(out), "WIM log to write ('-' = standard output)")
+      ("truth", po::value(&truth), "also write the simulated trucks (truck-list CSV) here")
+      ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
+  site_flags.add_to(desc);
+  po::options_description fleet_desc("fleet distribution (paper Table 1 defaults)");
+  fleet_desc.add_options()
+      ("m2-mean", po::value(&dist.sprung_mass_kg.mean)->default_value(dist.sprung_mass_kg.mean), "sprung mass mean (kg)")
+      ("m2-sd", po::value(&dist.sprung_mass_kg.sd)->default_value(dist.sprung_mass_kg.sd), "sprung mass sd (kg)")
+      ("k-mean", po::value(&dist.stiffness_npm.mean)->default_value(dist.stiffness_npm.mean), "suspension stiffness mean (N/m)")
+      ("k-sd", po::value(&dist.stiffness_npm.sd)->default_value(dist.stiffness_npm.sd), "suspension stiffness sd (N/m)")
+      ("kt-mean", po::value(&dist.tyre_stiffness_npm.mean)->default_value(dist.tyre_stiffness_npm.mean), "tyre stiffness mean (N/m)")
+      ("kt-sd", po::value(&dist.tyre_stiffness_npm.sd)->default_value(dist.tyre_stiffness_npm.sd), "tyre stiffness sd (N/m)")
+      ("speed-mean", po::value(&dist.speed_mps.mean)->default_value(dist.speed_mps.mean), "speed mean (m/s)")
+      ("speed-sd", po::value(&dist.speed_mps.sd)->default_value(dist.speed_mps.sd), "speed sd (m/s)")
+      ("z-mean", po::value(&dist.lateral_m.mean)->default_value(dist.lateral_m.mean), "lateral position mean (m)")
+      ("z-sd", po::value(&dist.lateral_m.sd)->default_value(dist.lateral_m.sd), "lateral position sd (m)");
+  desc.add(fleet_desc);
+  po::variables_map vm;
+  if (!parse_or_help(argc, argv, desc, nullptr, vm,
+                     "usage: ssrfleet simulate [--road AS1|FILE] [--trucks N|FILE] [--noise S] [--seed K] [--out FILE]")) {
+    return 0;
+  }
+  const std::uint64_t seed = parse_seed(seed_text);
+  if (!(noise >= 0.0)) throw UsageError("--noise " + std::to_string(noise) + ": must be >= 0");
+
+  const site::Site site(site::load_road(road), site_flags.to_options());
+  std::vector<fleet::Truck> trucks;
+  if (is_count(trucks_arg)) {
+    const long n = std::stol(trucks_arg);
+    if (n < 1 || n > 10'000'000) throw UsageError("--trucks " + trucks_arg + ": must be between 1 and 10000000");
+    trucks = fleet::draw_fleet(dist, static_cast<int>(n), site.lateral_min_m(), site.lateral_max_m(), seed);
+  } else {
+    trucks = io::read_truck_list_file(trucks_arg, site.lateral_min_m(), site.lateral_max_m());
+  }
+  const fleet::SimulatedLog log = fleet::simulate_log(site, trucks, noise, seed);
+
+  write_output(out, [&](std::ostream& os) {
+    os << "# ssrfleet " << SSRFLEET_VERSION << " simulate: road " << site.surface().name << ", "
+       << trucks.size() << " trucks, noise " << noise << ", seed " << seed << ", site " << site.fingerprint()
+       << "\n";
+    io::write_wim_log(os, log.records);
+  });
+  if (!truth.empty()) write_output(truth, [&](std::ostream& os) { io::write_truck_list(os, trucks); });
+
+  if (log.lift_offs > 0) {
+    std::cerr << "ssrfleet simulate: warning: " << log.lift_offs
+              << " truck(s) lost tyre contact (IF < 0) somewhere on the road; minimum IF "
+              << log.min_if.minCoeff() << "\n";
+  }
+  if (!quiet) {
+    std::cerr << "ssrfleet simulate: " << trucks.size() << " trucks on road " << site.surface().name << " ("
+              << site.sensors() << " sensors), noise sd " << noise << ", seed " << seed << " -> "
+              << (out == "-" ? std::string("stdout") : out) << "\n";
+  }
+  return 0;
+}
+
+}  // namespace ssrfleet::cli

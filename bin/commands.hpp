@@ -1,0 +1,10 @@
+// Every subcommand: run_X(argc, argv) with argv[0] the subcommand's name. Each returns an exit
+// status; only main() turns exceptions into messages.
+#pragma once
+
+namespace ssrfleet::cli {
+
+int run_simulate(int argc, const char* const argv[]);
+int run_road(int argc, const char* const argv[]);
+
+}  // namespace ssrfleet::cli

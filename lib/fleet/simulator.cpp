@@ -1,0 +1,64 @@
+#include "fleet/simulator.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <boost/random/mersenne_twister.hpp>
+#include <boost/random/normal_distribution.hpp>
+
+#include "util/errors.hpp"
+
+namespace ssrfleet::fleet {
+
+site::TruckBatch to_batch(const std::vector<Truck>& trucks) {
+  site::TruckBatch b;
+  b.resize(static_cast<Eigen::Index>(trucks.size()));
+  for (std::size_t i = 0; i < trucks.size(); ++i) {
+    const auto j = static_cast<Eigen::Index>(i);
+    b.speed_mps[j] = trucks[i].speed_mps;
+    b.sprung_mass_kg[j] = trucks[i].sprung_mass_kg;
+    b.stiffness_npm[j] = trucks[i].stiffness_npm;
+    b.tyre_stiffness_npm[j] = trucks[i].tyre_stiffness_npm;
+    b.lateral_m[j] = trucks[i].lateral_m;
+  }
+  return b;
+}
+
+SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd,
+                          std::uint64_t seed) {
+  if (!(std::isfinite(noise_sd) && noise_sd >= 0.0)) {
+    throw UsageError("simulate: noise sd is " + std::to_string(noise_sd) + ", but must be non-negative");
+  }
+  for (const auto& t : trucks) {
+    if (t.lateral_m < site.lateral_min_m() || t.lateral_m > site.lateral_max_m()) {
+      throw UsageError("simulate: truck '" + t.truck_id + "' has lateral position " + std::to_string(t.lateral_m) +
+                       " m, outside the road surface [" + std::to_string(site.lateral_min_m()) + ", " +
+                       std::to_string(site.lateral_max_m()) + "] m");
+    }
+  }
+  SimulatedLog log;
+  const auto n = static_cast<Eigen::Index>(trucks.size());
+  log.model_if.resize(site.sensors(), n);
+  site.impact_factors(to_batch(trucks), log.model_if, &log.min_if);
+  log.lift_offs = static_cast<int>((log.min_if < 0.0).count());
+
+  // A stream of its own, so adding noise never changes which fleet a seed draws.
+  boost::random::mt19937_64 engine(seed ^ 0x6e6f697365ULL /* "noise" */);
+  boost::random::normal_distribution<double> noise(0.0, 1.0);
+  log.records.reserve(trucks.size());
+  for (Eigen::Index i = 0; i < n; ++i) {
+    io::WimRecord r;
+    r.truck_id = trucks[static_cast<std::size_t>(i)].truck_id;
+    r.speed_mps = trucks[static_cast<std::size_t>(i)].speed_mps;
+    r.sprung_mass_kg = trucks[static_cast<std::size_t>(i)].sprung_mass_kg;
+    r.impact_factor = log.model_if.col(i).matrix();
+    if (noise_sd > 0.0) {
+      for (Eigen::Index m = 0; m < r.impact_factor.size(); ++m) r.impact_factor[m] += noise_sd * noise(engine);
+    }
+    log.records.push_back(std::move(r));
+  }
+  return log;
+}
+
+}  // namespace ssrfleet::fleet

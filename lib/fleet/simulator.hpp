@@ -1,0 +1,30 @@
+// Simulates a WIM log: runs each truck over the site with the quarter-car integrator and adds
+// independent N(0, sigma_IF^2) measurement noise to every impact factor (paper eq. (6)).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fleet/truck.hpp"
+#include "io/wim_log.hpp"
+#include "site/site.hpp"
+
+namespace ssrfleet::fleet {
+
+struct SimulatedLog {
+  std::vector<io::WimRecord> records;   // what the WIM system would log
+  Eigen::ArrayXXd model_if;             // noise-free model IF, sensors x trucks
+  Eigen::ArrayXd min_if;                // per truck, minimum IF over the pass
+  int lift_offs = 0;                    // trucks whose tyre force went negative somewhere
+};
+
+// noise_sd = 0 gives the exact model output. The noise stream is derived from `seed` and is
+// independent of the stream that draws a fleet from the same seed.
+SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd,
+                          std::uint64_t seed);
+
+site::TruckBatch to_batch(const std::vector<Truck>& trucks);
+
+}  // namespace ssrfleet::fleet

@@ -1,0 +1,19 @@
+// One truck axle as the fleet model sees it (paper §3.1): what the WIM system measures (speed,
+// sprung mass) and what it does not (suspension stiffness k, tyre stiffness k_t, lateral
+// position z). The unsprung mass and suspension damping are the site's constants.
+#pragma once
+
+#include <string>
+
+namespace ssrfleet::fleet {
+
+struct Truck {
+  std::string truck_id;
+  double speed_mps = 23.43;
+  double sprung_mass_kg = 4450.0;
+  double stiffness_npm = 500e3;       // k
+  double tyre_stiffness_npm = 1950e3; // k_t
+  double lateral_m = 1.5;             // z
+};
+
+}  // namespace ssrfleet::fleet

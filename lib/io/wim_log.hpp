@@ -1,0 +1,98 @@
+// The WIM-log CSV of DESIGN.md §7: header first, '#' lines are comments. Columns `truck_id`
+// (unique), `time_s` (optional), `speed_mps`, `sprung_mass_kg`, then either `if_1`..`if_M`
+// (impact factors) or `force_1`..`force_M` (tyre force, N). Extra columns are ignored.
+//
+// The reader is incremental and never stops on a bad record: it hands the record back as a
+// Rejection (line, verbatim text, field, reason), so a stream can quarantine it and go on, and
+// an offline replay can turn the first one into an error.
+#pragma once
+
+#include <cstddef>
+#include <istream>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <unordered_set>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "io/csv_reader.hpp"
+
+namespace ssrfleet::io {
+
+struct WimRecord {
+  std::string truck_id;
+  std::optional<double> time_s;
+  double speed_mps = 0.0;
+  double sprung_mass_kg = 0.0;
+  Eigen::VectorXd impact_factor;  // one per sensor, in sensor order
+  std::size_t line = 0;           // where it came from
+};
+
+struct Rejection {
+  std::size_t line = 0;
+  std::string raw;      // the record verbatim, for a rejects file
+  std::string field;
+  std::string reason;
+  std::string message;  // "file:line: field 'x': reason"
+};
+
+// What a record may hold and still be physical. A tyre force sensor reads >= 0 (a wheel in the
+// air reads 0), and four times the static load is far beyond any truck on a road that is still
+// open, so an IF outside [0, 4] is a fault, not a truck.
+struct WimLimits {
+  double min_speed_mps = 0.5;
+  double max_speed_mps = 60.0;
+  double min_sprung_mass_kg = 100.0;
+  double max_sprung_mass_kg = 60000.0;
+  double min_impact_factor = 0.0;
+  double max_impact_factor = 4.0;
+};
+
+class WimLogReader {
+ public:
+  enum class Status { record, rejected, end };
+
+  // Reads and checks the header; throws DataError (line 1 or the header's line, field = the
+  // missing column) if a required column is missing, or if both if_ and force_ columns are
+  // present. unsprung_mass_kg converts tyre forces to impact factors: IF = F / ((m1 + m2) g).
+  WimLogReader(std::istream& in, std::string source_name, double unsprung_mass_kg,
+               WimLimits limits = {});
+
+  int sensors() const { return sensors_; }
+  bool reads_forces() const { return forces_; }
+  const std::string& source_name() const { return csv_.source_name(); }
+  const std::string& header_line() const { return header_raw_; }
+
+  // Next record: `record` on success, `rejected` (with `why` filled) for a bad one, `end` at EOF.
+  Status next(WimRecord& record, Rejection& why);
+
+  // Truck ids the reader treats as already absorbed (e.g. after a resume): a later record with
+  // one of these ids is rejected as a duplicate.
+  void mark_seen(const std::string& truck_id) { seen_.insert(truck_id); }
+
+ private:
+  WimRecord parse(const CsvRow& row) const;
+
+  CsvReader csv_;
+  double unsprung_mass_kg_;
+  WimLimits limits_;
+  std::string header_raw_;
+  std::size_t header_fields_ = 0;
+  long id_col_ = -1, time_col_ = -1, speed_col_ = -1, mass_col_ = -1;
+  std::vector<long> value_cols_;
+  std::vector<std::string> value_names_;
+  int sensors_ = 0;
+  bool forces_ = false;
+  std::unordered_set<std::string> seen_;
+};
+
+// Reads a whole log; the first bad record is an error (DataError naming file, line, field).
+std::vector<WimRecord> read_wim_log_file(const std::string& path, double unsprung_mass_kg,
+                                         int* sensors_out = nullptr);
+
+// Writes records as a WIM log with if_ columns, full precision (round trips bit-exactly).
+void write_wim_log(std::ostream& out, const std::vector<WimRecord>& records);
+
+}  // namespace ssrfleet::io

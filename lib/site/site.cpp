@@ -1,0 +1,128 @@
+#include "site/site.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+#include "road/envelopment.hpp"
+#include "road/wheel_path.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::site {
+
+namespace {
+vehicle::PassIntegrator make_integrator(const road::Surface& surface, const SensorArray& sensors) {
+  const std::vector<double> positions = sensors.positions_m();
+  for (std::size_t m = 0; m < positions.size(); ++m) {
+    if (positions[m] > surface.length_m() + 1e-9) {
+      std::ostringstream os;
+      os << "sensor " << (m + 1) << " at " << positions[m] << " m is beyond the road's end at "
+         << surface.length_m() << " m (road '" << surface.name << "')";
+      throw UsageError(os.str());
+    }
+  }
+  return vehicle::PassIntegrator(surface.dx_m, surface.samples(), positions);
+}
+
+void check_nonneg(double v, const char* what) {
+  if (!(std::isfinite(v) && v >= 0.0)) {
+    throw UsageError(std::string("site: ") + what + " is " + std::to_string(v) + ", but must be non-negative");
+  }
+}
+
+// FNV-1a, 64 bit: a digest, not a security measure.
+struct Fnv1a {
+  std::uint64_t h = 1469598103934665603ULL;
+  void bytes(const void* p, std::size_t n) {
+    const auto* c = static_cast<const unsigned char*>(p);
+    for (std::size_t i = 0; i < n; ++i) {
+      h ^= c[i];
+      h *= 1099511628211ULL;
+    }
+  }
+  void value(double v) { bytes(&v, sizeof v); }
+};
+}  // namespace
+
+void SiteOptions::validate() const {
+  check_nonneg(envelopment_m, "envelopment base length (m)");
+  if (!(std::isfinite(unsprung_mass_kg) && unsprung_mass_kg > 0.0)) {
+    throw UsageError("site: unsprung mass m1 is " + std::to_string(unsprung_mass_kg) + " kg, but must be positive");
+  }
+  check_nonneg(suspension_damping_nspm, "suspension damping c_b (N s/m)");
+  check_nonneg(tyre_damping_nspm, "tyre damping c_t (N s/m)");
+  sensors.validate();
+}
+
+void TruckBatch::resize(Eigen::Index n) {
+  speed_mps.resize(n);
+  sprung_mass_kg.resize(n);
+  stiffness_npm.resize(n);
+  tyre_stiffness_npm.resize(n);
+  lateral_m.resize(n);
+}
+
+Site::Site(road::Surface raw_surface, SiteOptions options)
+    : surface_(road::envelop((options.validate(), raw_surface), options.envelopment_m)),
+      options_(std::move(options)),
+      integrator_(make_integrator(surface_, options_.sensors)) {}
+
+vehicle::WheelPath Site::wheel_path(double lateral_m) const {
+  const road::LateralBracket b = road::bracket(surface_, lateral_m);
+  return {surface_.line(b.line_a), surface_.line(b.line_b), b.weight_b};
+}
+
+vehicle::QuarterCar Site::car(double sprung_mass_kg, double stiffness_npm, double tyre_stiffness_npm) const {
+  vehicle::QuarterCar c;
+  c.sprung_mass_kg = sprung_mass_kg;
+  c.unsprung_mass_kg = options_.unsprung_mass_kg;
+  c.suspension_stiffness_npm = stiffness_npm;
+  c.suspension_damping_nspm = options_.suspension_damping_nspm;
+  c.tyre_stiffness_npm = tyre_stiffness_npm;
+  c.tyre_damping_nspm = options_.tyre_damping_nspm;
+  return c;
+}
+
+void Site::impact_factors(const TruckBatch& trucks, Eigen::Ref<Eigen::ArrayXXd> if_out,
+                          Eigen::ArrayXd* min_if) const {
+  impact_factors_at(integrator_, trucks, if_out, min_if);
+}
+
+void Site::impact_factors_at(const vehicle::PassIntegrator& integrator, const TruckBatch& trucks,
+                             Eigen::Ref<Eigen::ArrayXXd> if_out, Eigen::ArrayXd* min_if) const {
+  const Eigen::Index n = trucks.size();
+  vehicle::QuarterCarBatch cars;
+  cars.sprung_mass_kg = trucks.sprung_mass_kg;
+  cars.unsprung_mass_kg = Eigen::ArrayXd::Constant(n, options_.unsprung_mass_kg);
+  cars.suspension_stiffness_npm = trucks.stiffness_npm;
+  cars.suspension_damping_nspm = Eigen::ArrayXd::Constant(n, options_.suspension_damping_nspm);
+  cars.tyre_stiffness_npm = trucks.tyre_stiffness_npm;
+  cars.tyre_damping_nspm = Eigen::ArrayXd::Constant(n, options_.tyre_damping_nspm);
+  std::vector<vehicle::WheelPath> paths;
+  paths.reserve(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) paths.push_back(wheel_path(trucks.lateral_m[i]));
+  integrator.run_batch(cars, trucks.speed_mps, paths, if_out, min_if);
+}
+
+std::string Site::fingerprint() const {
+  Fnv1a f;
+  f.value(surface_.dx_m);
+  f.value(surface_.y0_m);
+  f.value(surface_.dy_m);
+  const Eigen::Index rows = surface_.samples(), cols = surface_.lines();
+  f.bytes(&rows, sizeof rows);
+  f.bytes(&cols, sizeof cols);
+  f.bytes(surface_.height_m.data(), static_cast<std::size_t>(surface_.height_m.size()) * sizeof(double));
+  for (double p : sensor_positions_m()) f.value(p);
+  f.value(options_.envelopment_m);
+  f.value(options_.unsprung_mass_kg);
+  f.value(options_.suspension_damping_nspm);
+  f.value(options_.tyre_damping_nspm);
+  std::ostringstream os;
+  os << std::hex << std::setw(16) << std::setfill('0') << f.h;
+  return os.str();
+}
+
+}  // namespace ssrfleet::site
