@@ -220,7 +220,7 @@ TEST_CASE("radiata log evidence is still right when the sampler never resamples"
   check_known_answer("model 1 (x1)", data.x1, kExactLogZ1, 8, 1000, 0.3, 4.0, 0.0);
 }
 
-TEST_CASE("radiata posterior is bit-identical for 1, 2 and 3 threads", "[smc][radiata]") {
+TEST_CASE("radiata posterior is bit-identical for 1 or 2 or 3 threads", "[smc][radiata]") {
   const RadiataData data = read_radiata();
   auto options = radiata_options(300, 77);
   options.threads = 1;

@@ -30,7 +30,7 @@ TEST_CASE("a stream depends only on its keys", "[smc][rng]") {
   CHECK(first.size() == 5);
 }
 
-TEST_CASE("uniform01 is uniform on [0, 1) (chi-square over 20 bins)", "[smc][rng]") {
+TEST_CASE("uniform01 is uniform on the unit interval (chi-square over 20 bins)", "[smc][rng]") {
   smc::Rng rng(9);
   const int n = 200000, bins = 20;
   Eigen::ArrayXd count = Eigen::ArrayXd::Zero(bins);

@@ -35,7 +35,7 @@ TEST_CASE("normalised weights and ESS of hand-checkable weights", "[smc][weights
   CHECK(smc::effective_sample_size(one_hot) == Approx(1.0));
 }
 
-TEST_CASE("conditional ESS and the log mean weight increment match Zhou, Johansen and Aston", "[smc][weights]") {
+TEST_CASE("conditional ESS and the log mean weight increment match Zhou Johansen and Aston (2016)", "[smc][weights]") {
   Eigen::ArrayXd W(2), ll(2);
   // Equal weights: CESS equals the ESS of the new weights w = (1, 3): (1+3)²/(1+9) = 1.6.
   W << 0.5, 0.5;
