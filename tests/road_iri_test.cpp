@@ -105,24 +105,26 @@ TEST_CASE("the IRI of generated roads agrees with the spectral estimate", "[road
   }
   const double spectral_iri = 1000.0 * std::sqrt(2.0 / std::numbers::pi * variance);
 
-  // Four 2 km profiles; the IRI of one 2 km profile scatters by ~3 % (measured over seeds),
-  // so the mean of four is within ~2 %; 10 % tolerance.
+  // Four 2 km profiles: the IRI of one 2 km profile scatters by 1.4 % (sd over 16 seeds), so
+  // the mean of four has a sd of 0.7 %; 5 % tolerance (7 sd, room for the non-Gaussian tails of a
+  // random-phase surface).
   double simulated = 0.0;
   const int profiles = 4;
   for (int seed = 1; seed <= profiles; ++seed) {
     const Surface s = generate_surface(spec, static_cast<std::uint64_t>(seed));
     simulated += iri_m_per_km(s.height_m.col(0), s.dx_m) / profiles;
   }
-  CHECK(simulated == Approx(spectral_iri).epsilon(0.10));
+  CHECK(simulated == Approx(spectral_iri).epsilon(0.05));
 
-  // The AS1 preset (100 m only): its wheel paths scatter around the same expectation by far
-  // more (few cycles of the 1-20 m wavelengths the car responds to, and a start-up transient
-  // over ~20 m of 100 m), so a factor-of-two band.
+  // The AS1 preset (100 m only; its spec is the one above): the 1.4 % sd of a 2 km profile
+  // becomes ~6 % over 100 m (sqrt(20) times), plus the start-up transient over the first ~20 m;
+  // a +-35 % band (> 5 sd). The spectral value, ~2.4 m/km, is what pavement engineers expect of
+  // a fair highway (new ~1, good 1-3 m/km).
   const Surface as1 = preset_surface("AS1");
   for (const double z : {0.5, 1.5, 2.5, 3.5, 4.5}) {
     const double iri = iri_m_per_km(wheel_path(as1, z), as1.dx_m);
     INFO("z = " << z << " m, spectral " << spectral_iri);
-    CHECK(iri > 0.5 * spectral_iri);
-    CHECK(iri < 2.0 * spectral_iri);
+    CHECK(iri > 0.65 * spectral_iri);
+    CHECK(iri < 1.35 * spectral_iri);
   }
 }
