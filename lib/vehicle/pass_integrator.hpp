@@ -63,6 +63,10 @@ class PassIntegrator {
   // it and the fraction of a step beyond it.
   std::vector<Eigen::Index> position_sample_;
   std::vector<double> position_fraction_;
+  // The distinct non-zero fractions (one partial-step discretisation per truck for each), and per
+  // position the index into it, or -1 for a position on the sample grid.
+  std::vector<double> distinct_fractions_;
+  std::vector<int> position_fraction_slot_;
 };
 
 }  // namespace ssrfleet::vehicle
