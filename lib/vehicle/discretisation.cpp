@@ -45,11 +45,14 @@ double balanced_norm1(const Eigen::Matrix4d& X) {
   return norm;
 }
 
-// Smallest Taylor degree N of psi2 with theta^(N+1) / (N+3)! <= 1e-17, which bounds the
-// truncation of psi2 (and, after multiplying by X and X^2, of psi1 and Phi) relative to 1.
+// Smallest Taylor degree N of psi2 with theta^(N-2) 5! / (N+3)! <= 1e-17. The truncation error of
+// psi2 is about theta^(N+1) / (N+3)!; an entry of psi2 B that the input reaches only through p
+// couplings (p <= 3 in a 4-state chain) starts at theta^p / (p+2)!, so this bounds the error of
+// every entry relative to itself, not only relative to the largest (a fine step would otherwise
+// lose digits in the body's response to a ramp).
 int taylor_degree(double theta) {
-  double term = theta / 6.0;  // theta^(N+1) / (N+3)! at N = 0
-  int n = 0;
+  int n = 3;
+  double term = theta * 120.0 / 720.0;  // theta^(N-2) 5! / (N+3)! at N = 3
   while (term > 1e-17 && n < 30) {
     ++n;
     term *= theta / static_cast<double>(n + 3);
