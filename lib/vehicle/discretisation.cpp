@@ -1,3 +1,10 @@
+// GCC 12 with -march=native (AVX-512) reports false -W(maybe-)uninitialized warnings inside Eigen's
+// general matrix product kernels (avx512fintrin.h, _mm512_extractf64x4_pd), which MatrixFunctions
+// instantiates. The intrinsics header comes in with the first Eigen include and the warning is
+// issued at its location, so the suppression must precede every include of this file.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+
 #include "vehicle/discretisation.hpp"
 
 #include <array>

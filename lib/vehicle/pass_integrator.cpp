@@ -328,12 +328,6 @@ PassExtremes PassIntegrator::run(const QuarterCar& car, double speed_mps, const 
   return PassExtremes{1.0 + min_m};
 }
 
-namespace {
-
-constexpr int kBlock = 16;
-
-}  // namespace
-
 void PassIntegrator::run_batch(const QuarterCarBatch& cars, const Eigen::ArrayXd& speed_mps,
                                const std::vector<WheelPath>& paths, Eigen::Ref<Eigen::ArrayXXd> if_out,
                                Eigen::ArrayXd* min_if_out) const {
@@ -364,7 +358,7 @@ void PassIntegrator::run_batch(const QuarterCarBatch& cars, const Eigen::ArrayXd
   if (min_if_out != nullptr) min_if_out->resize(n);
   if (n == 0) return;
 
-  constexpr int BS = kBlock;
+  constexpr int BS = batch_block_trucks;
   const auto state = std::make_unique<BlockState<BS>>();
   BlockState<BS>& s = *state;
   const std::size_t nfrac = distinct_fractions_.size();
