@@ -6,5 +6,7 @@ namespace ssrfleet::cli {
 
 int run_simulate(int argc, const char* const argv[]);
 int run_road(int argc, const char* const argv[]);
+int run_fit(int argc, const char* const argv[]);
+int run_predict(int argc, const char* const argv[]);
 
 }  // namespace ssrfleet::cli

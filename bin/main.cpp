@@ -22,6 +22,8 @@ const std::map<std::string, Command>& commands() {
   static const std::map<std::string, Command> table = {
       {"simulate", {ssrfleet::cli::run_simulate, "simulate a fleet over a road and write a WIM log"}},
       {"road", {ssrfleet::cli::run_road, "write a preset road surface or summarise a road file"}},
+      {"fit", {ssrfleet::cli::run_fit, "fit the fleet posterior to a WIM log (SMC, or the batch MCMC)"}},
+      {"predict", {ssrfleet::cli::run_predict, "predict the SSR pattern from a posterior, on this road or another"}},
   };
   return table;
 }

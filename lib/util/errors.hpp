@@ -20,11 +20,13 @@ class DataError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
   DataError(const std::string& file, std::size_t line, const std::string& field, const std::string& what)
-      : std::runtime_error(file + ":" + std::to_string(line) + ": field '" + field + "': " + what),
+      : std::runtime_error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": field '" + field +
+                           "': " + what),
         file_(file), line_(line), field_(field), reason_(what) {}
   const std::string& file() const { return file_; }
   std::size_t line() const { return line_; }
   const std::string& field() const { return field_; }
+  // line 0 means the format has no lines to speak of (JSON): the message then omits it.
   // The reason alone, without the location prefix (for a rejects list or a stream report).
   const std::string& reason() const { return reason_; }
 

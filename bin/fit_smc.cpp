@@ -1,0 +1,60 @@
+#include <chrono>
+#include <iomanip>
+#include <sstream>
+#include <thread>
+
+#include "fit_methods.hpp"
+#include "fleet/fleet_smc.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::cli {
+
+namespace po = boost::program_options;
+
+void FitFlags::add_to(po::options_description& desc) {
+  po::options_description smc("SMC options");
+  smc.add_options()
+      ("particles", po::value(&particles)->default_value(particles), "number of particles P (>= 2)")
+      ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
+      ("rejuvenate", po::value(&rejuvenate)->default_value(rejuvenate), "older trucks whose latents are moved per new truck")
+      ("cess", po::value(&cess_target)->default_value(cess_target), "conditional-ESS target of each tempering step, in (0, 1)")
+      ("max-sweeps", po::value(&max_sweeps)->default_value(max_sweeps), "MCMC sweeps per tempering step at most");
+  po::options_description mcmc("MCMC options (--method mcmc)");
+  mcmc.add_options()
+      ("iterations", po::value(&iterations)->default_value(iterations), "MCMC sweeps in all")
+      ("burn-in", po::value(&burn_in)->default_value(burn_in), "sweeps discarded (proposal adaptation happens here)")
+      ("thin", po::value(&thin)->default_value(thin), "keep every thin-th sweep");
+  desc.add(smc).add(mcmc);
+}
+
+fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<io::WimRecord>& records,
+                              const FitFlags& flags, std::uint64_t seed, std::ostream* progress) {
+  fleet::FleetSmc::Options o;
+  o.sampler.particles = flags.particles;
+  o.sampler.threads = flags.threads > 0 ? flags.threads : smc::TemperedSampler::Options::default_threads();
+  o.sampler.seed = seed;
+  o.sampler.tempering.cess_target = flags.cess_target;
+  o.sampler.mh.max_steps = flags.max_sweeps;
+  o.rejuvenated_trucks = flags.rejuvenate;
+  std::string why;
+  if (!o.sampler.IsValid(&why)) throw UsageError(why);
+  fleet::FleetSmc smc(site, o);
+  const std::size_t n = records.size();
+  for (std::size_t t = 0; t < n; ++t) {
+    const auto& stage = smc.absorb(records[t]);
+    if (progress) {
+      double acc = 0.0;
+      int blocks = 0;
+      for (const auto& step : stage.steps) {
+        for (double a : step.mh.acceptance) acc += a, ++blocks;
+      }
+      *progress << "fit: truck " << (t + 1) << "/" << n << " " << records[t].truck_id << ": " << stage.steps.size()
+                << " steps, ESS " << std::fixed << std::setprecision(0) << smc.sampler().ess() << "/" << flags.particles
+                << ", acceptance " << std::setprecision(2) << (blocks ? acc / blocks : 0.0) << ", "
+                << std::setprecision(3) << stage.wall_time_s << " s\n";
+    }
+  }
+  return smc.cloud();
+}
+
+}  // namespace ssrfleet::cli

@@ -1,0 +1,42 @@
+// Online fleet inference: absorbs WIM records one at a time, each as one tempered SMC stage
+// (DESIGN.md §4), and can hand out the current posterior at any moment.
+#pragma once
+
+#include <memory>
+
+#include "fleet/fleet_target.hpp"
+#include "fleet/posterior_cloud.hpp"
+#include "io/wim_log.hpp"
+#include "site/site.hpp"
+#include "smc/engine.hpp"
+
+namespace ssrfleet::fleet {
+
+class FleetSmc {
+ public:
+  struct Options {
+    smc::TemperedSampler::Options sampler;  // its `particles` is the particle count P
+    int rejuvenated_trucks = 2;
+    PriorBounds prior;
+  };
+
+  // UsageError on invalid options (the sampler's IsValid message).
+  FleetSmc(const site::Site& site, Options options);
+
+  // Extends every particle with the record's truck and tempers its likelihood in. Throws
+  // NumericalError naming the truck (and the step) if the weights degenerate or a density is NaN.
+  const smc::StageSummary& absorb(const io::WimRecord& record);
+
+  long trucks_seen() const { return static_cast<long>(target_.trucks()); }
+  const FleetTarget& target() const { return target_; }
+  const smc::TemperedSampler& sampler() const { return sampler_; }
+  PosteriorCloud cloud() const;
+
+ private:
+  const site::Site& site_;
+  FleetTarget target_;
+  smc::TemperedSampler sampler_;
+  std::vector<double> speed_mps_, sprung_mass_kg_;
+};
+
+}  // namespace ssrfleet::fleet

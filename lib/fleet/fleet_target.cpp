@@ -1,0 +1,265 @@
+#include "fleet/fleet_target.hpp"
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "smc/rng.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::fleet {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr int kThetaBlock = 0;
+constexpr int kNewestBlock = 1;
+
+// Standard normal by Box-Muller on the counter-based stream (fixed forever, like uniform01).
+double standard_normal(smc::Rng& rng) {
+  double u1 = smc::uniform01(rng);
+  while (u1 <= 0.0) u1 = smc::uniform01(rng);
+  const double u2 = smc::uniform01(rng);
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+}
+
+// Sum over n draws of log N(x; mean, sd) from Σx and Σx².
+double sum_log_normal(double n, double sum, double sum2, double mean, double sd) {
+  const double squares = sum2 - 2.0 * mean * sum + n * mean * mean;
+  return -0.5 * n * kLog2Pi - n * std::log(sd) - squares / (2.0 * sd * sd);
+}
+}  // namespace
+
+FleetTarget::FleetTarget(const site::Site& site, Options options)
+    : site_(site), options_(options), lateral_{site.lateral_min_m(), site.lateral_max_m()},
+      sensors_(site.sensors()) {
+  if (options_.particles < 2) {
+    throw UsageError("fleet target: particles is " + std::to_string(options_.particles) + ", but must be at least 2");
+  }
+  if (options_.rejuvenated_trucks < 0) throw UsageError("fleet target: rejuvenated_trucks must be >= 0");
+  theta_.resize(kHyperCount, options_.particles);
+  sums_ = Eigen::MatrixXd::Zero(kSumCount, options_.particles);
+}
+
+HyperVector FleetTarget::theta_of(Eigen::Index particle) const {
+  HyperVector t;
+  for (int j = 0; j < kHyperCount; ++j) t[j] = theta_(j, particle);
+  return t;
+}
+
+void FleetTarget::initialise(const smc::RngFactory& rngs) {
+  const auto& prior = options_.prior;
+  for (Eigen::Index i = 0; i < options_.particles; ++i) {
+    smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+    for (int j = 0; j < kHyperCount; ++j) theta_(j, i) = prior.lo[j] + (prior.hi[j] - prior.lo[j]) * smc::uniform01(rng);
+  }
+  latents_.resize(0, options_.particles);
+  ssr_.resize(0, options_.particles);
+  sums_.setZero();
+  speed_mps_.clear();
+  sprung_mass_kg_.clear();
+  observed_if_.clear();
+}
+
+void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& rngs) {
+  if (record.impact_factor.size() != sensors_) {
+    throw DataError("truck '" + record.truck_id + "' has " + std::to_string(record.impact_factor.size()) +
+                    " impact factors but the site has " + std::to_string(sensors_) + " sensors");
+  }
+  const Eigen::Index n = trucks();
+  // The previous newest truck becomes an older one: fold it into the running sums.
+  speed_mps_.push_back(record.speed_mps);
+  sprung_mass_kg_.push_back(record.sprung_mass_kg);
+  observed_if_.push_back(record.impact_factor);
+  latents_.conservativeResize(3 * (n + 1), Eigen::NoChange);
+  ssr_.conservativeResize(n + 1, Eigen::NoChange);
+  const Eigen::Index P = options_.particles;
+  for (Eigen::Index i = 0; i < P; ++i) {
+    smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+    const HyperVector t = theta_of(i);
+    latents_(3 * n + kStiffness, i) = t[kK] + t[kSigmaK] * standard_normal(rng);
+    latents_(3 * n + kTyreStiffness, i) = t[kKt] + t[kSigmaKt] * standard_normal(rng);
+    // z ~ N(Z, σ_z²) truncated to the road: the prior box keeps at least ~45 % of the mass on it,
+    // so rejection is cheap.
+    double z = t[kZ] + t[kSigmaZ] * standard_normal(rng);
+    while (z < lateral_.lo_m || z > lateral_.hi_m) z = t[kZ] + t[kSigmaZ] * standard_normal(rng);
+    latents_(3 * n + kLateral, i) = z;
+  }
+  Eigen::ArrayXd ssr(P);
+  residuals(n, latents_.middleRows(3 * n, 3), ssr, smc::ParallelFor(1));
+  ssr_.row(n) = ssr.matrix().transpose();
+  for (Eigen::Index i = 0; i < P; ++i) recompute_sums(i);
+
+  // Rotate through the older trucks so each is rejuvenated every ~n / r stages.
+  rejuvenated_.clear();
+  const Eigen::Index older = n;
+  const Eigen::Index r = std::min<Eigen::Index>(options_.rejuvenated_trucks, older);
+  for (Eigen::Index q = 0; q < r; ++q) rejuvenated_.push_back((n * r + q) % older);
+}
+
+Eigen::MatrixXd FleetTarget::truck_latents(Eigen::Index truck) const { return latents_.middleRows(3 * truck, 3); }
+
+void FleetTarget::recompute_sums(Eigen::Index i) {
+  double s[kSumCount] = {};
+  for (Eigen::Index j = 0; j + 1 < trucks(); ++j) {
+    const double k = latents_(3 * j + kStiffness, i), kt = latents_(3 * j + kTyreStiffness, i),
+                 z = latents_(3 * j + kLateral, i);
+    s[kSumK] += k;
+    s[kSumK2] += k * k;
+    s[kSumKt] += kt;
+    s[kSumKt2] += kt * kt;
+    s[kSumZ] += z;
+    s[kSumZ2] += z * z;
+    s[kSumSsr] += ssr_(j, i);
+  }
+  for (int c = 0; c < kSumCount; ++c) sums_(c, i) = s[c];
+}
+
+double FleetTarget::base_density(Eigen::Index /*particle*/, const HyperVector& t, const double* s,
+                                 const double* newest) const {
+  double lp = options_.prior.log_prior(t);
+  if (lp == -kInf) return lp;
+  const double n = static_cast<double>(trucks() - 1);
+  if (n > 0) {
+    lp += sum_log_normal(n, s[kSumK], s[kSumK2], t[kK], t[kSigmaK]);
+    lp += sum_log_normal(n, s[kSumKt], s[kSumKt2], t[kKt], t[kSigmaKt]);
+    lp += sum_log_normal(n, s[kSumZ], s[kSumZ2], t[kZ], t[kSigmaZ]) -
+          n * log_normal_mass(lateral_.lo_m, lateral_.hi_m, t[kZ], t[kSigmaZ]);
+    const double nm = n * sensors_;
+    lp += -0.5 * nm * kLog2Pi - nm * std::log(t[kSigmaIf]) - s[kSumSsr] / (2.0 * t[kSigmaIf] * t[kSigmaIf]);
+  }
+  return lp + log_latent_density(newest[kStiffness], newest[kTyreStiffness], newest[kLateral], t, lateral_);
+}
+
+double FleetTarget::newest_loglik(double ssr, double sigma_if) const {
+  if (!std::isfinite(ssr)) return -kInf;
+  return log_likelihood_from_ssr(ssr, sensors_, sigma_if);
+}
+
+void FleetTarget::residuals(Eigen::Index truck, const Eigen::Ref<const Eigen::MatrixXd>& latents,
+                            Eigen::Ref<Eigen::ArrayXd> ssr_out, const smc::ParallelFor& parallel) {
+  const Eigen::Index P = latents.cols();
+  const auto& y = observed_if_[static_cast<std::size_t>(truck)];
+  const double v = speed_mps_[static_cast<std::size_t>(truck)], m2 = sprung_mass_kg_[static_cast<std::size_t>(truck)];
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    // Only physical states are simulated; the rest get an infinite SSR (likelihood zero).
+    std::vector<Eigen::Index> valid;
+    valid.reserve(static_cast<std::size_t>(end - begin));
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const double k = latents(kStiffness, i), kt = latents(kTyreStiffness, i), z = latents(kLateral, i);
+      if (k > 0.0 && kt > 0.0 && z >= lateral_.lo_m && z <= lateral_.hi_m) valid.push_back(i);
+      else ssr_out[i] = kInf;
+    }
+    if (valid.empty()) return;
+    site::TruckBatch batch;
+    batch.resize(static_cast<Eigen::Index>(valid.size()));
+    for (std::size_t q = 0; q < valid.size(); ++q) {
+      const auto b = static_cast<Eigen::Index>(q);
+      batch.speed_mps[b] = v;
+      batch.sprung_mass_kg[b] = m2;
+      batch.stiffness_npm[b] = latents(kStiffness, valid[q]);
+      batch.tyre_stiffness_npm[b] = latents(kTyreStiffness, valid[q]);
+      batch.lateral_m[b] = latents(kLateral, valid[q]);
+    }
+    Eigen::ArrayXXd model_if(sensors_, batch.size());
+    site_.impact_factors(batch, model_if);
+    for (std::size_t q = 0; q < valid.size(); ++q) {
+      ssr_out[valid[q]] = (model_if.col(static_cast<Eigen::Index>(q)) - y.array()).square().sum();
+    }
+  });
+  passes_ += P;
+}
+
+void FleetTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
+                              const smc::ParallelFor& /*parallel*/) {
+  const Eigen::Index newest = trucks() - 1;
+  for (Eigen::Index i = 0; i < options_.particles; ++i) {
+    const HyperVector t = theta_of(i);
+    log_base[i] = base_density(i, t, sums_.col(i).data(), latents_.col(i).data() + 3 * newest);
+    loglik[i] = newest_loglik(ssr_(newest, i), t[kSigmaIf]);
+  }
+}
+
+std::vector<smc::BlockSpec> FleetTarget::blocks() const {
+  std::vector<smc::BlockSpec> b = {{"theta", kHyperCount}, {"truck " + std::to_string(trucks()) + " (newest)", 3}};
+  for (Eigen::Index j : rejuvenated_) b.push_back({"truck " + std::to_string(j + 1), 3});
+  return b;
+}
+
+Eigen::Index FleetTarget::block_truck(int block) const {
+  if (block == kNewestBlock) return trucks() - 1;
+  return rejuvenated_.at(static_cast<std::size_t>(block - 2));
+}
+
+void FleetTarget::get_block(int block, Eigen::Ref<Eigen::MatrixXd> values) const {
+  if (block == kThetaBlock) values = theta_;
+  else values = latents_.middleRows(3 * block_truck(block), 3);
+}
+
+void FleetTarget::log_density_at(int block, const Eigen::Ref<const Eigen::MatrixXd>& proposed,
+                                 Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
+                                 const smc::ParallelFor& parallel) {
+  const Eigen::Index P = options_.particles;
+  const Eigen::Index newest = trucks() - 1;
+  if (block == kThetaBlock) {
+    for (Eigen::Index i = 0; i < P; ++i) {
+      HyperVector t;
+      for (int j = 0; j < kHyperCount; ++j) t[j] = proposed(j, i);
+      log_base[i] = base_density(i, t, sums_.col(i).data(), latents_.col(i).data() + 3 * newest);
+      loglik[i] = log_base[i] == -kInf ? -kInf : newest_loglik(ssr_(newest, i), t[kSigmaIf]);
+    }
+    return;
+  }
+  const Eigen::Index truck = block_truck(block);
+  proposed_ssr_.resize(P);
+  residuals(truck, proposed, proposed_ssr_, parallel);
+  for (Eigen::Index i = 0; i < P; ++i) {
+    const HyperVector t = theta_of(i);
+    if (block == kNewestBlock) {
+      log_base[i] = base_density(i, t, sums_.col(i).data(), proposed.col(i).data());
+      loglik[i] = newest_loglik(proposed_ssr_[i], t[kSigmaIf]);
+      continue;
+    }
+    // An older truck: its terms live in the running sums; swap its old values for the proposal.
+    double s[kSumCount];
+    for (int c = 0; c < kSumCount; ++c) s[c] = sums_(c, i);
+    const double k0 = latents_(3 * truck + kStiffness, i), kt0 = latents_(3 * truck + kTyreStiffness, i),
+                 z0 = latents_(3 * truck + kLateral, i);
+    const double k1 = proposed(kStiffness, i), kt1 = proposed(kTyreStiffness, i), z1 = proposed(kLateral, i);
+    s[kSumK] += k1 - k0;
+    s[kSumK2] += k1 * k1 - k0 * k0;
+    s[kSumKt] += kt1 - kt0;
+    s[kSumKt2] += kt1 * kt1 - kt0 * kt0;
+    s[kSumZ] += z1 - z0;
+    s[kSumZ2] += z1 * z1 - z0 * z0;
+    s[kSumSsr] += proposed_ssr_[i] - ssr_(truck, i);
+    const bool physical = std::isfinite(proposed_ssr_[i]);
+    log_base[i] = physical ? base_density(i, t, s, latents_.col(i).data() + 3 * newest) : -kInf;
+    loglik[i] = newest_loglik(ssr_(newest, i), t[kSigmaIf]);
+  }
+}
+
+void FleetTarget::accept(int block, const std::vector<char>& accepted, const Eigen::Ref<const Eigen::MatrixXd>& proposed) {
+  const Eigen::Index P = options_.particles;
+  if (block == kThetaBlock) {
+    for (Eigen::Index i = 0; i < P; ++i) {
+      if (accepted[static_cast<std::size_t>(i)]) theta_.col(i) = proposed.col(i);
+    }
+    return;
+  }
+  const Eigen::Index truck = block_truck(block);
+  for (Eigen::Index i = 0; i < P; ++i) {
+    if (!accepted[static_cast<std::size_t>(i)]) continue;
+    latents_.block(3 * truck, i, 3, 1) = proposed.col(i);
+    ssr_(truck, i) = proposed_ssr_[i];
+    if (block != kNewestBlock) recompute_sums(i);
+  }
+}
+
+void FleetTarget::resample(const std::vector<Eigen::Index>& ancestors) {
+  theta_ = theta_(Eigen::all, ancestors).eval();
+  latents_ = latents_(Eigen::all, ancestors).eval();
+  ssr_ = ssr_(Eigen::all, ancestors).eval();
+  sums_ = sums_(Eigen::all, ancestors).eval();
+}
+
+}  // namespace ssrfleet::fleet

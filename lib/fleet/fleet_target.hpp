@@ -1,0 +1,95 @@
+// The fleet model (fleet_model.hpp) presented to the generic tempered SMC engine as a target.
+// This is the only place where the fleet meets particles: the engine never sees a truck, the
+// densities never see a particle.
+//
+// Each particle holds θ (7 hyperparameters) and the latents (k, k_t, z) of every truck absorbed
+// so far, with each truck's sum of squared residuals cached so θ moves need no integrator call.
+// When truck n+1 arrives (add_truck), every particle is extended with latents drawn from
+// p(x | θ), so the stage's incremental weight is the new truck's likelihood alone; the engine
+// tempers it in. The MH blocks of a stage are θ, the new truck's latents, and a rotating handful
+// of older trucks' latents (rejuvenation, so their paths do not collapse onto a few ancestors).
+//
+// Stage base density (log γ, DESIGN.md §4):
+//   log p(θ) + Σ_{i≤n} [log p(x_i | θ) + log p(y_i | x_i, σ_IF)] + log p(x_{n+1} | θ)
+// computed in O(1) per particle from running sums (Σk, Σk², Σk_t, Σk_t², Σz, Σz², ΣSSR).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fleet/fleet_model.hpp"
+#include "io/wim_log.hpp"
+#include "site/site.hpp"
+#include "smc/target.hpp"
+
+namespace ssrfleet::fleet {
+
+class FleetTarget final : public smc::TemperedModel {
+ public:
+  struct Options {
+    Eigen::Index particles = 1024;
+    PriorBounds prior;
+    int rejuvenated_trucks = 2;  // older trucks whose latents get an MH block in each stage
+  };
+
+  FleetTarget(const site::Site& site, Options options);
+
+  // Draws θ for every particle from the prior (before the first truck).
+  void initialise(const smc::RngFactory& rngs);
+  // Extends every particle with the truck's latents drawn from p(x | θ) and makes its
+  // likelihood the increment of the next stage. The record's sensor count must match the site.
+  void add_truck(const io::WimRecord& record, const smc::RngFactory& rngs);
+
+  Eigen::Index trucks() const { return static_cast<Eigen::Index>(speed_mps_.size()); }
+  const Eigen::MatrixXd& theta() const { return theta_; }  // 7 x P
+  // Latents of truck j for every particle: 3 x P (k, k_t, z).
+  Eigen::MatrixXd truck_latents(Eigen::Index truck) const;
+  long long integrator_passes() const { return passes_; }
+
+  // smc::TemperedModel
+  Eigen::Index particles() const override { return options_.particles; }
+  void log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
+                   const smc::ParallelFor& parallel) override;
+  std::vector<smc::BlockSpec> blocks() const override;
+  void get_block(int block, Eigen::Ref<Eigen::MatrixXd> values) const override;
+  void log_density_at(int block, const Eigen::Ref<const Eigen::MatrixXd>& proposed,
+                      Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
+                      const smc::ParallelFor& parallel) override;
+  void accept(int block, const std::vector<char>& accepted,
+              const Eigen::Ref<const Eigen::MatrixXd>& proposed) override;
+  void resample(const std::vector<Eigen::Index>& ancestors) override;
+
+ private:
+  // Running sums over the trucks before the newest (index < trucks()-1), per particle.
+  enum Sum : int { kSumK = 0, kSumK2, kSumKt, kSumKt2, kSumZ, kSumZ2, kSumSsr, kSumCount };
+
+  double base_density(Eigen::Index particle, const HyperVector& theta, const double* sums,
+                      const double* newest_latents) const;
+  double newest_loglik(double ssr, double sigma_if) const;
+  void recompute_sums(Eigen::Index particle);
+  // SSR of truck `truck` at the latents in columns of `latents` (3 x P) for every particle.
+  void residuals(Eigen::Index truck, const Eigen::Ref<const Eigen::MatrixXd>& latents,
+                 Eigen::Ref<Eigen::ArrayXd> ssr_out, const smc::ParallelFor& parallel);
+  HyperVector theta_of(Eigen::Index particle) const;
+  Eigen::Index block_truck(int block) const;  // truck moved by a latent block
+
+  const site::Site& site_;
+  Options options_;
+  LateralRange lateral_;
+  int sensors_ = 0;
+  // Observed data per truck.
+  std::vector<double> speed_mps_, sprung_mass_kg_;
+  std::vector<Eigen::VectorXd> observed_if_;
+  // Particle states.
+  Eigen::MatrixXd theta_;    // 7 x P
+  Eigen::MatrixXd latents_;  // 3n x P: rows 3j..3j+2 = (k, k_t, z) of truck j
+  Eigen::MatrixXd ssr_;      // n x P: sum of squared residuals of truck j
+  Eigen::MatrixXd sums_;     // kSumCount x P (trucks before the newest)
+  std::vector<Eigen::Index> rejuvenated_;  // older trucks moved in this stage
+  Eigen::ArrayXd proposed_ssr_;            // SSR at the last proposals of a latent block
+  long long passes_ = 0;
+};
+
+}  // namespace ssrfleet::fleet

@@ -1,0 +1,28 @@
+// What a fit leaves behind for prediction: weighted draws of the hyperparameters θ, the observed
+// trucks' speeds and sprung masses (the predictive draws v and m2 from them, DESIGN.md §5), and
+// enough about the site to refuse a prediction that mixes up sites.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace ssrfleet::fleet {
+
+struct PosteriorCloud {
+  std::string method;             // "smc" or "mcmc"
+  Eigen::MatrixXd theta;          // kHyperCount x draws (fleet_model.hpp order)
+  Eigen::ArrayXd weights;         // normalised, one per draw (equal for MCMC)
+  std::vector<double> speed_mps;  // observed trucks
+  std::vector<double> sprung_mass_kg;
+  std::string site_fingerprint;   // site::Site::fingerprint() of the fitted site
+  std::string road_name;
+  int sensors = 0;
+  double lateral_min_m = 0.0, lateral_max_m = 0.0;
+  long trucks_seen = 0;
+  double ess = 0.0;
+  double log_evidence = 0.0;      // log p(y_1:n), SMC only (NaN for MCMC)
+};
+
+}  // namespace ssrfleet::fleet

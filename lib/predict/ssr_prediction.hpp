@@ -1,0 +1,42 @@
+// The SSR prediction of DESIGN.md §5: the posterior predictive distribution of impact factors
+// along the road. Draw θ from the weighted posterior, trucks from the fleet distribution θ
+// describes (k, k_t, z), speed and sprung mass from the observed trucks, simulate, add
+// N(0, σ_IF²). Reported per position: the mean IF, the 2.5 / 97.5 % prediction limits, and the
+// 95 % credible band of the fleet's mean pattern (the spread of the per-θ mean over θ).
+// Works on any site: the one fitted, or another road (paper Fig. 9).
+#pragma once
+
+#include <cstdint>
+#include <ostream>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fleet/posterior_cloud.hpp"
+#include "site/site.hpp"
+
+namespace ssrfleet::predict {
+
+struct PredictionOptions {
+  int theta_draws = 200;       // θ draws (for the band of the mean pattern)
+  int trucks_per_draw = 100;   // simulated trucks per θ draw
+  std::uint64_t seed = 1;
+
+  void validate() const;  // UsageError naming the option
+};
+
+struct SsrPrediction {
+  std::vector<double> position_m;
+  Eigen::ArrayXd mean_if;
+  Eigen::ArrayXd lower95, upper95;            // prediction limits for one truck's IF
+  Eigen::ArrayXd mean_lower95, mean_upper95;  // credible band of the fleet-mean IF
+};
+
+// positions_m: where to predict (strictly increasing, on the road); empty = the site's sensors.
+SsrPrediction predict_ssr(const fleet::PosteriorCloud& posterior, const site::Site& site,
+                          std::vector<double> positions_m, const PredictionOptions& options);
+
+// The CSV of DESIGN.md §7: position_m,mean_if,lower95,upper95,mean_lower95,mean_upper95.
+void write_prediction_csv(std::ostream& out, const SsrPrediction& prediction);
+
+}  // namespace ssrfleet::predict

@@ -1,0 +1,187 @@
+#include "smc/engine.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+#include <thread>
+#include <utility>
+
+#include "smc/weights.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::smc {
+
+namespace {
+
+// Purposes of the engine's streams (first key below the root).
+enum StreamPurpose : std::uint64_t { kModel = 1, kResample = 2, kMove = 3 };
+
+// Ceres-style rule checks: each failing rule writes "Options: <rule>" and returns false.
+#define SMC_OPTION_RULE(condition, text)   \
+  do {                                     \
+    if (!(condition)) {                    \
+      if (error) *error = "TemperedSampler::Options: " text; \
+      return false;                        \
+    }                                      \
+  } while (false)
+
+}  // namespace
+
+int TemperedSampler::Options::default_threads() {
+  const unsigned n = std::thread::hardware_concurrency();
+  return n == 0 ? 1 : static_cast<int>(n);
+}
+
+bool TemperedSampler::Options::IsValid(std::string* error) const {
+  SMC_OPTION_RULE(particles >= 2, "particles must be >= 2");
+  SMC_OPTION_RULE(threads >= 1, "threads must be >= 1");
+  SMC_OPTION_RULE(ess_rmin >= 0.0 && ess_rmin <= 1.0, "ess_rmin must be in [0, 1]");
+  SMC_OPTION_RULE(tempering.cess_target > 0.0 && tempering.cess_target < 1.0,
+                  "tempering.cess_target must be in (0, 1)");
+  SMC_OPTION_RULE(tempering.tolerance > 0.0 && tempering.tolerance < 1.0,
+                  "tempering.tolerance must be in (0, 1)");
+  SMC_OPTION_RULE(tempering.max_bisections >= 1, "tempering.max_bisections must be >= 1");
+  SMC_OPTION_RULE(tempering.min_step > 0.0 && tempering.min_step < 1.0, "tempering.min_step must be in (0, 1)");
+  SMC_OPTION_RULE(mh.scale > 0.0 && std::isfinite(mh.scale), "mh.scale must be positive");
+  SMC_OPTION_RULE(mh.jump_target > 0.0 && mh.jump_target <= 1.0, "mh.jump_target must be in (0, 1]");
+  SMC_OPTION_RULE(mh.min_steps >= 1, "mh.min_steps must be >= 1");
+  SMC_OPTION_RULE(mh.max_steps >= mh.min_steps, "mh.max_steps must be >= mh.min_steps");
+  if (error) error->clear();
+  return true;
+}
+
+#undef SMC_OPTION_RULE
+
+TemperedSampler::TemperedSampler(Options options)
+    : options_(std::move(options)), parallel_(options_.threads >= 1 ? options_.threads : 1), root_(options_.seed) {
+  std::string error;
+  if (!options_.IsValid(&error)) throw UsageError(error);
+  log_weights_ = Eigen::ArrayXd::Constant(options_.particles, -std::log(static_cast<double>(options_.particles)));
+}
+
+RngFactory TemperedSampler::model_rngs() const {
+  return root_.child(kModel, static_cast<std::uint64_t>(stages_run_));
+}
+
+Eigen::ArrayXd TemperedSampler::weights() const { return log_weights_.exp(); }
+
+double TemperedSampler::ess() const { return effective_sample_size(weights()); }
+
+StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view label) {
+  const auto started = std::chrono::steady_clock::now();
+  const Eigen::Index P = options_.particles;
+  if (model.particles() != P) {
+    std::ostringstream os;
+    os << "TemperedSampler::run_stage: stage '" << label << "': the model has " << model.particles()
+       << " particles but options.particles is " << P;
+    throw UsageError(os.str());
+  }
+  StageSummary summary;
+  summary.stage = stages_run_;
+  summary.label = std::string(label);
+  const auto stage_key = static_cast<std::uint64_t>(stages_run_);
+
+  Eigen::ArrayXd log_base(P), loglik(P);
+  model.log_density(log_base, loglik, parallel_);
+  check_loglik(loglik, label);
+  for (Eigen::Index i = 0; i < P; ++i) {
+    if (!(log_base[i] > -std::numeric_limits<double>::infinity() && log_base[i] < std::numeric_limits<double>::infinity())) {
+      std::ostringstream os;
+      os << "stage '" << label << "': log base density of particle " << i << " is " << log_base[i]
+         << " (a particle outside the support, or a NaN)";
+      throw NumericalError(os.str());
+    }
+  }
+
+  double phi = 0.0;
+  for (int step = 0; phi < 1.0; ++step) {
+    StepInfo info;
+    info.step = step;
+    const Eigen::ArrayXd W = log_weights_.exp();
+
+    // 1. next temperature, 2. reweight (log Z increment with the weights before the step).
+    const TemperatureStep ts = next_temperature_step(phi, W, loglik, options_.tempering, label);
+    const bool last = ts.delta == 1.0 - phi;
+    info.delta_phi = ts.delta;
+    info.relative_cess = ts.relative_cess;
+    info.bisections = ts.bisections;
+    info.log_evidence_increment = log_mean_weight_increment(W, loglik, ts.delta);
+    phi = last ? 1.0 : phi + ts.delta;
+    info.phi = phi;
+    Eigen::ArrayXd logw = log_weights_ + log_increment(loglik, ts.delta);
+    log_weights_ = logw - log_sum_exp(logw);
+    summary.log_evidence_increment += info.log_evidence_increment;
+    Eigen::ArrayXd Wnew = log_weights_.exp();
+    info.ess = effective_sample_size(Wnew);
+
+    // 3. resample if degenerate.
+    if (info.ess < options_.ess_rmin * static_cast<double>(P)) {
+      Rng rng = root_.child(kResample, stage_key).stream(static_cast<std::uint64_t>(step));
+      const std::vector<Eigen::Index> ancestors = resample(options_.resampling, Wnew, P, rng);
+      model.resample(ancestors);
+      Eigen::ArrayXd b(P), l(P);
+      for (Eigen::Index i = 0; i < P; ++i) {
+        b[i] = log_base[ancestors[static_cast<std::size_t>(i)]];
+        l[i] = loglik[ancestors[static_cast<std::size_t>(i)]];
+      }
+      log_base.swap(b);
+      loglik.swap(l);
+      log_weights_.setConstant(-std::log(static_cast<double>(P)));
+      Wnew.setConstant(1.0 / static_cast<double>(P));
+      info.resampled = true;
+    }
+
+    // 4. move at the new temperature.
+    info.mh = mh_moves(model, phi, Wnew, log_base, loglik, root_.child(kMove, stage_key, static_cast<std::uint64_t>(step)),
+                       parallel_, options_.mh, label);
+    check_loglik(loglik, label);  // custom moves may have written the cache
+
+    summary.steps.push_back(info);
+    summary.log_evidence = log_evidence_ + summary.log_evidence_increment;
+    summary.final_ess = effective_sample_size(Wnew);
+    summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    if (options_.progress) options_.progress(summary, summary.steps.back());
+  }
+
+  log_evidence_ += summary.log_evidence_increment;
+  summary.log_evidence = log_evidence_;
+  ++stages_run_;
+  summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  history_.push_back(summary);
+  return summary;
+}
+
+int StageSummary::resamplings() const {
+  int n = 0;
+  for (const auto& s : steps) n += s.resampled ? 1 : 0;
+  return n;
+}
+
+std::string StageSummary::BriefReport() const {
+  std::ostringstream os;
+  os << "stage " << stage << " '" << label << "': " << steps.size() << " steps, " << resamplings()
+     << " resampled, log Z increment " << std::setprecision(10) << log_evidence_increment << ", log Z "
+     << log_evidence << ", final ESS " << std::setprecision(4) << final_ess << ", " << wall_time_s << " s";
+  return os.str();
+}
+
+std::string StageSummary::FullReport() const {
+  std::ostringstream os;
+  os << BriefReport() << "\n";
+  os << "  step       phi    delta_phi  rCESS    ESS  resampled  logZ_inc  sweeps  acceptance/jump per block\n";
+  for (const auto& s : steps) {
+    os << "  " << std::setw(4) << s.step << "  " << std::setw(9) << std::setprecision(6) << s.phi << "  "
+       << std::setw(10) << std::setprecision(4) << s.delta_phi << "  " << std::setw(5) << std::setprecision(3)
+       << s.relative_cess << "  " << std::setw(6) << std::setprecision(5) << s.ess << "  " << std::setw(9)
+       << (s.resampled ? "yes" : "no") << "  " << std::setw(8) << std::setprecision(5)
+       << s.log_evidence_increment << "  " << std::setw(6) << s.mh.sweeps;
+    for (std::size_t b = 0; b < s.mh.block_names.size(); ++b)
+      os << "  " << s.mh.block_names[b] << " " << std::setprecision(3) << s.mh.acceptance[b] << "/" << s.mh.jump[b];
+    os << "\n";
+  }
+  return os.str();
+}
+
+}  // namespace ssrfleet::smc
