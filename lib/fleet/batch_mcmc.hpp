@@ -1,0 +1,137 @@
+// The paper's batch MCMC (Wilson, Harris & O'Brien §3.2): Metropolis-within-Gibbs over all
+// 3N + 7 unknowns of the fleet model (fleet_model.hpp), the baseline that the sequential
+// sampler is checked and benchmarked against (DESIGN.md §4).
+//
+// One sweep:
+//  1. Latents. Given theta the trucks are conditionally independent, so every truck proposes a
+//     random-walk move of (k, kt, z) at once, all proposals go through ONE batched quarter-car
+//     call (Site::impact_factors), and each truck accepts or rejects on its own. A proposal
+//     with k <= 0, kt <= 0 or z off the road has target density 0 and is rejected without
+//     being simulated. Each truck's proposal covariance (its chain's covariance, scaled) and
+//     scale are adapted during burn-in towards `target_acceptance`, then frozen, so the chain
+//     after burn-in is a time-homogeneous Metropolis-within-Gibbs chain and valid.
+//  2. K, K_t: exact Gibbs, N(mean of latents, sigma^2 / N) truncated to the prior box.
+//  3. sigma_k, sigma_kt, sigma_IF: exact Gibbs. With the prior uniform on sigma, the precision
+//     has a truncated Gamma((n-1)/2, S/2) conditional (truncated_samplers.hpp); for sigma_IF,
+//     n = N M and S is the total of the per-truck sums of squared residuals, cached from step 1
+//     so no integrator call is needed. With n < 2 the shape is not positive: random-walk MH.
+//  4. (Z, sigma_z): the truncation of z_n to the road makes the normaliser depend on both, so
+//     there is no conjugate form: `z_moves_per_sweep` joint random-walk MH steps (cheap, O(N)).
+//
+// Initialisation (none of it uses the truth):
+//  - k_n = K = geometric centre of the K prior box (~4.5e5 N/m), kt_n = K_t = geometric centre
+//    of the K_t box (~1.6e6 N/m); sigma_k, sigma_kt = 20 % of those (a generic coefficient of
+//    variation).
+//  - z_n by a coarse grid search: every truck is simulated at z = lo, lo + step, ..., hi
+//    (`init_grid_step_m`, default 0.1 m) with k, kt at the values above, in one batched call,
+//    and starts at the z of least squared residual. The z-likelihood is multimodal (the road
+//    changes across its width) and a random walk from a poor start gets trapped in a far mode.
+//  - Z, sigma_z = mean and sd of those z_n (clipped to the box); sigma_IF = the rms residual at
+//    the grid optimum (clipped).
+//  - theta is held at these values for the first `hold_theta_sweeps` sweeps, so the latents
+//    spread out under the data before sigma_k, sigma_kt see them (all latents start equal, and a
+//    sigma drawn from a zero spread sits at the bottom of its box: the hierarchical funnel).
+//
+// Every random number comes from one Boost mt19937_64 seeded with `seed`: the same seed gives
+// the same chain on every machine (for a given Boost version). Single threaded; the integrator
+// batch is where the time goes. The library prints nothing: progress goes to a callback.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fleet/fleet_model.hpp"
+#include "io/wim_log.hpp"
+#include "site/site.hpp"
+
+namespace ssrfleet::fleet {
+
+// What the progress callback sees.
+struct BatchMcmcProgress {
+  int iteration = 0;   // sweeps done so far
+  int iterations = 0;  // total sweeps planned
+  bool burning_in = true;
+  double latent_acceptance = 0.0;  // mean over trucks, since the last report
+  double z_acceptance = 0.0;       // (Z, sigma_z) MH, since the last report
+  double seconds = 0.0;            // wall time since the start
+};
+
+struct BatchMcmcOptions {
+  int iterations = 20000;  // sweeps in all, burn-in included
+  int burn_in = 5000;      // sweeps discarded (and the only ones that adapt proposals)
+  int thin = 1;            // keep every thin-th sweep after burn-in
+  std::uint64_t seed = 1;
+  PriorBounds prior;
+
+  double target_acceptance = 0.3;  // per-truck latent acceptance the burn-in adapts towards
+  int z_moves_per_sweep = 10;      // (Z, sigma_z) random-walk MH steps per sweep
+  double init_grid_step_m = 0.1;   // grid step of the initial z search
+  int hold_theta_sweeps = 100;     // theta fixed for these first sweeps (<= burn_in)
+
+  // Progress: called every `progress_every` sweeps (0 = never) and after the last one.
+  int progress_every = 0;
+  std::function<void(const BatchMcmcProgress&)> progress;
+
+  // For tests and restarts: start from these instead of the initialisation above.
+  // initial_latents is trucks x 3 (k, kt, z) in the records' order.
+  std::optional<HyperVector> initial_theta;
+  std::optional<Eigen::MatrixXd> initial_latents;
+  // For tests: never update the latents (the sampler then targets p(theta | latents, data)).
+  bool freeze_latents = false;
+
+  // False, with a message naming the option and the rule, if an option is out of range.
+  bool IsValid(std::string* error) const;
+};
+
+struct BatchMcmcResult {
+  // Kept draws of theta after burn-in, thinned: rows are draws, columns in Hyper order
+  // (K, sigma_k, Kt, sigma_kt, Z, sigma_z, sigma_if).
+  Eigen::MatrixXd theta_draws;
+  // log of the unnormalised posterior density at each kept draw (a convergence trace).
+  Eigen::VectorXd log_target;
+
+  // Per truck (rows, the records' order) posterior mean and sd of (k, kt, z), over every sweep
+  // after burn-in (not thinned).
+  std::vector<std::string> truck_ids;
+  Eigen::MatrixXd latent_mean;
+  Eigen::MatrixXd latent_sd;
+
+  // Where the chain started (after the grid search).
+  HyperVector initial_theta{};
+  Eigen::MatrixXd initial_latents;
+
+  // Acceptance rates after burn-in. Gibbs blocks accept always; sigma blocks report 1 unless
+  // they fell back to MH (N < 2).
+  Eigen::VectorXd latent_acceptance_per_truck;
+  double latent_acceptance = 0.0;  // mean over trucks
+  double z_acceptance = 0.0;       // (Z, sigma_z) joint MH
+  double sigma_k_acceptance = 1.0, sigma_kt_acceptance = 1.0, sigma_if_acceptance = 1.0;
+  // Final per-truck proposal scale multipliers (frozen after burn-in).
+  Eigen::VectorXd latent_proposal_scale;
+
+  long long integrator_passes = 0;  // trucks simulated, the grid search included
+  long long integrator_calls = 0;   // batched Site::impact_factors calls
+  int iterations = 0;
+  int burn_in = 0;
+  double init_seconds = 0.0;  // grid search
+  double wall_seconds = 0.0;  // everything
+};
+
+// Runs the sampler on WIM records (speed, sprung mass, one impact factor per sensor) at `site`.
+// Throws UsageError on invalid options (the IsValid message) and DataError when a record's
+// impact factors do not match the site's sensors or there are no records.
+BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::WimRecord>& records,
+                               const BatchMcmcOptions& options);
+
+// log of the unnormalised posterior: log prior + sum_n log p(x_n | theta) + log-likelihood from
+// the per-truck sums of squared residuals (sensors per truck `sensors`). latents: trucks x 3.
+double log_posterior_unnormalised(const HyperVector& theta, const Eigen::Ref<const Eigen::MatrixXd>& latents,
+                                  const Eigen::Ref<const Eigen::VectorXd>& ssr, int sensors,
+                                  const PriorBounds& prior, const LateralRange& range);
+
+}  // namespace ssrfleet::fleet

@@ -1,0 +1,33 @@
+// Summaries of posterior draws, one column per quantity: mean, sd and the 2.5 / 97.5 % quantiles
+// that the posterior-summary JSON reports (DESIGN.md §7). Works on equally weighted draws (an
+// MCMC chain) and on weighted ones (an SMC particle cloud) alike.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace ssrfleet::fleet {
+
+struct ParameterSummary {
+  double mean = 0.0;
+  double sd = 0.0;
+  double q025 = 0.0;
+  double q975 = 0.0;
+};
+
+// The p-quantile (0 <= p <= 1) of weighted values (weights >= 0, not all 0; need not sum to 1).
+// Each sorted value x_(i) sits at the midpoint of its weight's span of the cumulative weight,
+// c_i = (W_(i-1) + W_i / 2) / W, and the quantile interpolates linearly between those points
+// (below c_1 it is x_(1), above c_n it is x_(n)). With equal weights this is Hazen's
+// definition, c_i = (i - 1/2) / n. Throws std::invalid_argument on bad weights or p.
+double weighted_quantile(const Eigen::Ref<const Eigen::VectorXd>& values,
+                         const Eigen::Ref<const Eigen::VectorXd>& weights, double p);
+
+// Per column of `draws` (rows are draws): weighted mean, sd (with the reliability-weights
+// correction W - sum w^2 / W, which is n - 1 for equal weights), q025 and q975. `weights`, if
+// given, has one entry per row. Throws std::invalid_argument on fewer than 2 draws or bad weights.
+std::vector<ParameterSummary> summarize_draws(const Eigen::Ref<const Eigen::MatrixXd>& draws,
+                                              const Eigen::VectorXd* weights = nullptr);
+
+}  // namespace ssrfleet::fleet
