@@ -20,8 +20,7 @@ class DataError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
   DataError(const std::string& file, std::size_t line, const std::string& field, const std::string& what)
-      : std::runtime_error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": field '" + field +
-                           "': " + what),
+      : std::runtime_error(location_message(file, line, field, what)),
         file_(file), line_(line), field_(field), reason_(what) {}
   const std::string& file() const { return file_; }
   std::size_t line() const { return line_; }
@@ -31,6 +30,14 @@ class DataError : public std::runtime_error {
   const std::string& reason() const { return reason_; }
 
  private:
+  static std::string location_message(const std::string& file, std::size_t line, const std::string& field,
+                                      const std::string& what) {
+    std::string m = file;
+    if (line > 0) m.append(":").append(std::to_string(line));
+    m.append(": field '").append(field).append("': ").append(what);
+    return m;
+  }
+
   std::string file_;
   std::size_t line_ = 0;
   std::string field_;
