@@ -9,8 +9,8 @@
 
 #include <array>
 #include <bit>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 
 #include <unsupported/Eigen/MatrixFunctions>
 
@@ -26,7 +26,9 @@ inline int binary_exponent(double v) {
 }
 
 // 2^e for |e| < 1000.
-inline double power_of_two(int e) { return std::bit_cast<double>(static_cast<std::uint64_t>(e + 1023) << 52); }
+inline double power_of_two(int e) {
+  return std::bit_cast<double>(static_cast<std::uint64_t>(e + 1023) << 52);
+}
 
 // 1-norm of D^-1 X D after three sweeps of Osborne's diagonal balancing with powers of two (as
 // LAPACK's dgebal: each state's scale chosen so its off-diagonal row and column sums match to
@@ -191,7 +193,9 @@ Discretisation<Inputs> discretise_expm(const Eigen::Matrix4d& A, const Eigen::Ma
 
 template Discretisation<1> discretise<1>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 1>&, double);
 template Discretisation<2> discretise<2>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 2>&, double);
-template Discretisation<1> discretise_expm<1>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 1>&, double);
-template Discretisation<2> discretise_expm<2>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 2>&, double);
+template Discretisation<1> discretise_expm<1>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 1>&,
+                                              double);
+template Discretisation<2> discretise_expm<2>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 2>&,
+                                              double);
 
 }  // namespace ssrfleet::vehicle
