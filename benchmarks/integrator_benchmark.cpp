@@ -36,7 +36,9 @@ constexpr double kDx = 0.05;
 constexpr Eigen::Index kSamples = 1971;
 constexpr int kLines = 8;
 
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -59,12 +61,14 @@ double floor_block(FloorBlock<BS>& s, const double* r, Eigen::Index steps) {
 #pragma GCC ivdep
     for (int t = 0; t < BS; ++t) {
       const double z0 = s.z[0][t], z1 = s.z[1][t], z2 = s.z[2][t], z3 = s.z[3][t];
-      s.z[0][t] = ((s.phi[0][t] * z0 + s.phi[1][t] * z1) + (s.phi[2][t] * z2 + s.phi[3][t] * z3)) + s.gamma[0][t] * rj;
-      s.z[1][t] = ((s.phi[4][t] * z0 + s.phi[5][t] * z1) + (s.phi[6][t] * z2 + s.phi[7][t] * z3)) + s.gamma[1][t] * rj;
-      s.z[2][t] =
-          ((s.phi[8][t] * z0 + s.phi[9][t] * z1) + (s.phi[10][t] * z2 + s.phi[11][t] * z3)) + s.gamma[2][t] * rj;
-      s.z[3][t] =
-          ((s.phi[12][t] * z0 + s.phi[13][t] * z1) + (s.phi[14][t] * z2 + s.phi[15][t] * z3)) + s.gamma[3][t] * rj;
+      s.z[0][t] = ((s.phi[0][t] * z0 + s.phi[1][t] * z1) + (s.phi[2][t] * z2 + s.phi[3][t] * z3)) +
+                  s.gamma[0][t] * rj;
+      s.z[1][t] = ((s.phi[4][t] * z0 + s.phi[5][t] * z1) + (s.phi[6][t] * z2 + s.phi[7][t] * z3)) +
+                  s.gamma[1][t] * rj;
+      s.z[2][t] = ((s.phi[8][t] * z0 + s.phi[9][t] * z1) + (s.phi[10][t] * z2 + s.phi[11][t] * z3)) +
+                  s.gamma[2][t] * rj;
+      s.z[3][t] = ((s.phi[12][t] * z0 + s.phi[13][t] * z1) + (s.phi[14][t] * z2 + s.phi[15][t] * z3)) +
+                  s.gamma[3][t] * rj;
     }
   }
   double sum = 0.0;
@@ -80,9 +84,12 @@ int main(int argc, char** argv) {
   std::string json_path;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--trucks" && i + 1 < argc) trucks = std::stoi(argv[++i]);
-    else if (a == "--reps" && i + 1 < argc) reps = std::stoi(argv[++i]);
-    else if (a == "--json" && i + 1 < argc) json_path = argv[++i];
+    if (a == "--trucks" && i + 1 < argc)
+      trucks = std::stoi(argv[++i]);
+    else if (a == "--reps" && i + 1 < argc)
+      reps = std::stoi(argv[++i]);
+    else if (a == "--json" && i + 1 < argc)
+      json_path = argv[++i];
     else {
       std::cerr << "usage: integrator_benchmark [--trucks N] [--reps R] [--json FILE]\n";
       return 64;
@@ -93,7 +100,8 @@ int main(int argc, char** argv) {
   // Road: kLines rough lines (a sum of random-phase sinusoids, AS1-like level).
   std::mt19937_64 engine(1);
   const auto u01 = [&] { return static_cast<double>(engine() >> 11) * 0x1.0p-53; };
-  std::vector<std::vector<double>> lines(kLines, std::vector<double>(static_cast<std::size_t>(kSamples), 0.0));
+  std::vector<std::vector<double>> lines(kLines,
+                                         std::vector<double>(static_cast<std::size_t>(kSamples), 0.0));
   for (auto& line : lines)
     for (int i = 1; i <= 200; ++i) {
       const double n = 0.05 * i, amp = std::sqrt(2.0 * 20e-6 * std::pow(n / 0.1, -2.0) * 0.05);
@@ -116,8 +124,8 @@ int main(int argc, char** argv) {
     cars.set_car(i, car);
     speeds[i] = std::clamp(23.43 + 2.08 * normal(engine), 15.0, 32.0);
     const int a = static_cast<int>(u01() * (kLines - 1));
-    paths.push_back(WheelPath{lines[static_cast<std::size_t>(a)].data(), lines[static_cast<std::size_t>(a + 1)].data(),
-                              u01()});
+    paths.push_back(WheelPath{lines[static_cast<std::size_t>(a)].data(),
+                              lines[static_cast<std::size_t>(a + 1)].data(), u01()});
   }
   std::vector<double> sensors;
   for (int i = 0; i < 16; ++i) sensors.push_back(76.0 + 1.5 * i);
@@ -181,12 +189,15 @@ int main(int argc, char** argv) {
 #else
   const char* isa = "sse2";
 #endif
-  std::printf("integrator benchmark: %lld samples (%lld steps) at %.2f m, 16 sensors, %d trucks (single: %d), "
-              "%d interleaved reps, medians; block %d trucks, ISA %s\n",
-              static_cast<long long>(kSamples), static_cast<long long>(steps), kDx, trucks, single_trucks, reps, BS,
-              isa);
+  std::printf(
+      "integrator benchmark: %lld samples (%lld steps) at %.2f m, 16 sensors, %d trucks (single: %d), "
+      "%d interleaved reps, medians; block %d trucks, ISA %s\n",
+      static_cast<long long>(kSamples), static_cast<long long>(steps), kDx, trucks, single_trucks, reps, BS,
+      isa);
   std::printf("%-34s %14s %16s\n", "variant", "us/truck-pass", "passes/s/core");
-  const auto row = [](const char* name, double us) { std::printf("%-34s %14.3f %16.0f\n", name, us, 1e6 / us); };
+  const auto row = [](const char* name, double us) {
+    std::printf("%-34s %14.3f %16.0f\n", name, us, 1e6 / us);
+  };
   row("single (run, incl. discretisation)", us_single);
   row("batched (run_batch, incl. discr.)", us_batch);
   row("floor (bare recurrence, SoA)", us_floor);
@@ -204,7 +215,8 @@ int main(int argc, char** argv) {
     j["reps"] = reps;
     j["block_trucks"] = BS;
     j["isa"] = isa;
-    j["us_per_pass"] = {{"single", us_single}, {"batched", us_batch}, {"floor", us_floor}, {"discretisation", us_disc}};
+    j["us_per_pass"] = {
+        {"single", us_single}, {"batched", us_batch}, {"floor", us_floor}, {"discretisation", us_disc}};
     j["ratio_batched_over_floor"] = us_batch / us_floor;
     j["ratio_single_over_batched"] = us_single / us_batch;
     std::ofstream out(json_path);

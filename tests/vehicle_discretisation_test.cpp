@@ -17,8 +17,8 @@ namespace {
 // exp([[A h, B h, 0], [0, 0, I], [0, 0, 0]]) by scaling and squaring a degree-30 Taylor series in
 // long double (64-bit mantissa), so its own error (~1e-18) is far below what is tested.
 template <int Inputs>
-Discretisation<Inputs> long_double_reference(const Eigen::Matrix4d& A, const Eigen::Matrix<double, 4, Inputs>& B,
-                                             double h) {
+Discretisation<Inputs> long_double_reference(const Eigen::Matrix4d& A,
+                                             const Eigen::Matrix<double, 4, Inputs>& B, double h) {
   constexpr int N = 4 + 2 * Inputs;
   using ML = Eigen::Matrix<long double, N, N>;
   ML M = ML::Zero();
@@ -59,13 +59,14 @@ double worst_relative(const M1& computed, const M2& reference) {
 
 }  // namespace
 
-TEST_CASE("ZOH discretisation of the Golden Car reproduces Sayers' published ST and PR", "[vehicle][discretisation]") {
+TEST_CASE("ZOH discretisation of the Golden Car reproduces Sayers' published ST and PR",
+          "[vehicle][discretisation]") {
   // golden-car.md: per unit sprung mass, state (z_s, z_s', z_u, z_u'), 0.25 m at 80 km/h.
   const double K1 = 653.0, K2 = 63.3, C = 6.0, u = 0.15;
   Eigen::Matrix4d A;
-  A << 0, 1, 0, 0,             //
-      -K2, -C, K2, C,          //
-      0, 0, 0, 1,              //
+  A << 0, 1, 0, 0,     //
+      -K2, -C, K2, C,  //
+      0, 0, 0, 1,      //
       K2 / u, C / u, -(K1 + K2) / u, -C / u;
   Eigen::Matrix<double, 4, 1> B(0, 0, 0, K1 / u);
   const double dt = 0.25 / (80.0 / 3.6);
@@ -73,7 +74,7 @@ TEST_CASE("ZOH discretisation of the Golden Car reproduces Sayers' published ST 
   Eigen::Matrix4d ST;
   ST << 0.9966071, 0.01091514, -0.002083274, 0.0003190145,  //
       -0.5563044, 0.9438768, -0.8324718, 0.05064701,        //
-      0.02153176, 0.002126763, 0.7508714, 0.008221888,       //
+      0.02153176, 0.002126763, 0.7508714, 0.008221888,      //
       3.335013, 0.3376467, -39.12762, 0.4347564;
   const Eigen::Vector4d PR(0.005476107, 1.388776, 0.2275968, 35.79262);
 
@@ -92,7 +93,8 @@ TEST_CASE("ZOH discretisation of the Golden Car reproduces Sayers' published ST 
                                               << " (tolerance 2e-5)");
 }
 
-TEST_CASE("the Taylor-Horner discretisation is exact to rounding in every entry", "[vehicle][discretisation]") {
+TEST_CASE("the Taylor-Horner discretisation is exact to rounding in every entry",
+          "[vehicle][discretisation]") {
   QuarterCar car;
   car.tyre_damping_nspm = 2000.0;
   const StateSpace ss = state_space(car);
@@ -108,14 +110,16 @@ TEST_CASE("the Taylor-Horner discretisation is exact to rounding in every entry"
     const Discretisation<2> fast = discretise<2>(ss.A, ss.B, c.step_s);
     const Discretisation<2> ref = long_double_reference<2>(ss.A, ss.B, c.step_s);
     INFO("step " << c.step_s << " s: worst relative Phi " << worst_relative(fast.Phi, ref.Phi) << " Gamma0 "
-                 << worst_relative(fast.Gamma0, ref.Gamma0) << " Gamma1 " << worst_relative(fast.Gamma1, ref.Gamma1));
+                 << worst_relative(fast.Gamma0, ref.Gamma0) << " Gamma1 "
+                 << worst_relative(fast.Gamma1, ref.Gamma1));
     CHECK(worst_relative(fast.Phi, ref.Phi) <= c.tolerance);
     CHECK(worst_relative(fast.Gamma0, ref.Gamma0) <= c.tolerance);
     CHECK(worst_relative(fast.Gamma1, ref.Gamma1) <= c.tolerance);
     // The augmented exponential from MatrixFunctions agrees to ~1e-13 of each row's scale.
     const Discretisation<2> expm = discretise_expm<2>(ss.A, ss.B, c.step_s);
     for (int i = 0; i < 4; ++i) {
-      CHECK((expm.Phi.row(i) - ref.Phi.row(i)).cwiseAbs().maxCoeff() <= 1e-11 * ref.Phi.row(i).cwiseAbs().maxCoeff());
+      CHECK((expm.Phi.row(i) - ref.Phi.row(i)).cwiseAbs().maxCoeff() <=
+            1e-11 * ref.Phi.row(i).cwiseAbs().maxCoeff());
       CHECK((expm.Gamma1.row(i) - ref.Gamma1.row(i)).cwiseAbs().maxCoeff() <=
             1e-11 * ref.Gamma1.row(i).cwiseAbs().maxCoeff());
     }

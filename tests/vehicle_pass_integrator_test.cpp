@@ -70,8 +70,8 @@ std::vector<double> rough_profile(double dx_m, std::size_t samples, std::uint64_
 // r' its slope on each interval; `substeps` RK4 steps per sample interval (never across a sample,
 // where r' jumps). Returns IF at each position, with r' at a sample taken as the slope of the
 // interval just completed (0 at x = 0), as the integrator documents.
-std::vector<double> rk4_reference(const QuarterCar& car, double speed_mps, const std::vector<double>& r, double dx_m,
-                                  const std::vector<double>& positions_m, int substeps) {
+std::vector<double> rk4_reference(const QuarterCar& car, double speed_mps, const std::vector<double>& r,
+                                  double dx_m, const std::vector<double>& positions_m, int substeps) {
   const double m1 = car.unsprung_mass_kg, m2 = car.sprung_mass_kg, k = car.suspension_stiffness_npm,
                cb = car.suspension_damping_nspm, kt = car.tyre_stiffness_npm, ct = car.tyre_damping_nspm;
   const double W = (m1 + m2) * gravity_mps2;
@@ -165,11 +165,14 @@ TEST_CASE("a flat road gives IF = 1 to rounding at every position", "[vehicle][p
     const std::vector<double> line(static_cast<std::size_t>(samples), height);
     for (const double ct : {0.0, 2000.0}) {
       Eigen::VectorXd ifs(static_cast<Eigen::Index>(positions.size()));
-      const PassExtremes ex = integrator.run(table1_truck(ct), 23.43, WheelPath{line.data(), line.data(), 0.3}, ifs);
+      const PassExtremes ex =
+          integrator.run(table1_truck(ct), 23.43, WheelPath{line.data(), line.data(), 0.3}, ifs);
       const double tol = height == 0.0 ? 0.0 : 1e-14;
-      INFO("height " << height << " m, c_t " << ct << ": worst |IF - 1| " << (ifs.array() - 1.0).abs().maxCoeff());
+      INFO("height " << height << " m, c_t " << ct << ": worst |IF - 1| "
+                     << (ifs.array() - 1.0).abs().maxCoeff());
       CHECK((ifs.array() - 1.0).abs().maxCoeff() <= tol);
-      WARN("flat road at " << height << " m, c_t " << ct << ": worst |IF - 1| " << (ifs.array() - 1.0).abs().maxCoeff());
+      WARN("flat road at " << height << " m, c_t " << ct << ": worst |IF - 1| "
+                           << (ifs.array() - 1.0).abs().maxCoeff());
       CHECK(std::abs(ex.min_if - 1.0) <= tol);
     }
   }
@@ -193,9 +196,10 @@ TEST_CASE("on a sinusoidal road the steady IF matches the analytic frequency res
     double wavelength_m;
     double tyre_damping_nspm;
   };
-  for (const Case c : {Case{"body bounce (1.6 Hz)", 20.0, 12.5, 0.0}, Case{"between modes (5 Hz)", 15.0, 3.0, 0.0},
-                       Case{"axle hop (12.2 Hz)", 23.43, 1.92, 0.0}, Case{"axle hop, c_t = 2000", 23.43, 1.92, 2000.0},
-                       Case{"slow, long wave (0.5 Hz)", 10.0, 20.0, 0.0}}) {
+  for (const Case c :
+       {Case{"body bounce (1.6 Hz)", 20.0, 12.5, 0.0}, Case{"between modes (5 Hz)", 15.0, 3.0, 0.0},
+        Case{"axle hop (12.2 Hz)", 23.43, 1.92, 0.0}, Case{"axle hop, c_t = 2000", 23.43, 1.92, 2000.0},
+        Case{"slow, long wave (0.5 Hz)", 10.0, 20.0, 0.0}}) {
     const QuarterCar car = table1_truck(c.tyre_damping_nspm);
     std::vector<double> line(static_cast<std::size_t>(samples));
     for (std::size_t j = 0; j < line.size(); ++j)
@@ -323,7 +327,8 @@ TEST_CASE("batched and single-truck passes agree to 1e-12", "[vehicle][pass_inte
   double worst = 0.0, worst_min = 0.0;
   for (Eigen::Index i = 0; i < n; ++i) {
     Eigen::VectorXd single(static_cast<Eigen::Index>(positions.size()));
-    const PassExtremes ex = integrator.run(cars.car(i), speeds[i], paths[static_cast<std::size_t>(i)], single);
+    const PassExtremes ex =
+        integrator.run(cars.car(i), speeds[i], paths[static_cast<std::size_t>(i)], single);
     worst = std::max(worst, (batch.col(i).matrix() - single).cwiseAbs().maxCoeff());
     worst_min = std::max(worst_min, std::abs(batch_min[i] - ex.min_if));
     CHECK(ex.min_if <= single.minCoeff());
@@ -333,7 +338,8 @@ TEST_CASE("batched and single-truck passes agree to 1e-12", "[vehicle][pass_inte
   CHECK(worst_min <= 1e-12);
 }
 
-TEST_CASE("the integrator rejects bad arguments with a message naming the field", "[vehicle][pass_integrator]") {
+TEST_CASE("the integrator rejects bad arguments with a message naming the field",
+          "[vehicle][pass_integrator]") {
   const std::vector<double> line(2001, 0.0);
   SECTION("a sensor beyond the road's end") {
     REQUIRE_THROWS_WITH(PassIntegrator(0.05, 2001, {76.0, 120.0}),

@@ -41,11 +41,13 @@ template <int Inputs>
 Discretisation<Inputs> discretise_expm(const Eigen::Matrix4d& A, const Eigen::Matrix<double, 4, Inputs>& B,
                                        double step_s);
 
-extern template Discretisation<1> discretise<1>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 1>&, double);
-extern template Discretisation<2> discretise<2>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 2>&, double);
-extern template Discretisation<1> discretise_expm<1>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 1>&,
-                                                     double);
-extern template Discretisation<2> discretise_expm<2>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 2>&,
-                                                     double);
+extern template Discretisation<1> discretise<1>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 1>&,
+                                                double);
+extern template Discretisation<2> discretise<2>(const Eigen::Matrix4d&, const Eigen::Matrix<double, 4, 2>&,
+                                                double);
+extern template Discretisation<1> discretise_expm<1>(const Eigen::Matrix4d&,
+                                                     const Eigen::Matrix<double, 4, 1>&, double);
+extern template Discretisation<2> discretise_expm<2>(const Eigen::Matrix4d&,
+                                                     const Eigen::Matrix<double, 4, 2>&, double);
 
 }  // namespace ssrfleet::vehicle

@@ -16,7 +16,8 @@ std::complex<double> impact_factor_response(const QuarterCar& car, double angula
   const Eigen::Matrix4cd M = iw * Eigen::Matrix4cd::Identity() - ss.A.cast<std::complex<double>>();
   const Eigen::Vector2cd U(1.0, iw);
   const Eigen::Vector4cd X = M.partialPivLu().solve(ss.B.cast<std::complex<double>>() * U);
-  return (car.tyre_stiffness_npm * (1.0 - X[0]) + car.tyre_damping_nspm * (iw - X[1])) / car.static_weight_n();
+  return (car.tyre_stiffness_npm * (1.0 - X[0]) + car.tyre_damping_nspm * (iw - X[1])) /
+         car.static_weight_n();
 }
 
 std::complex<double> impact_factor_response_wavelength(const QuarterCar& car, double speed_mps,

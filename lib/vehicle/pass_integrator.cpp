@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -107,8 +108,8 @@ inline double path_height(const double* la, const double* lb, double wa, double 
 
 // IF - 1 at a sample, from z there, the height there and the height one sample before.
 template <bool Damped>
-inline double grid_if_minus_one(double c_r, double e, double a, double b, double r, double r_before, double z0,
-                                double z1) {
+inline double grid_if_minus_one(double c_r, double e, double a, double b, double r, double r_before,
+                                double z0, double z1) {
   if constexpr (Damped) {
     return ((c_r * r + e * (r - r_before)) - a * z0) - b * z1;
   } else {
@@ -123,10 +124,12 @@ inline double grid_if_minus_one(double c_r, double e, double a, double b, double
 // IF - 1 a fraction f of a step beyond sample j.
 inline double partial_if_minus_one(const TruckCoefficients& c, const PartialCoefficients& pc, double f,
                                    const double* z, double r_j, double r_next) {
-  const double y1 = affine4(pc.phi[0], pc.phi[1], pc.phi[2], pc.phi[3], z[0], z[1], z[2], z[3], pc.alpha[0], r_j) +
-                    pc.beta[0] * r_next;
-  const double y1d = affine4(pc.phi[4], pc.phi[5], pc.phi[6], pc.phi[7], z[0], z[1], z[2], z[3], pc.alpha[1], r_j) +
-                     pc.beta[1] * r_next;
+  const double y1 =
+      affine4(pc.phi[0], pc.phi[1], pc.phi[2], pc.phi[3], z[0], z[1], z[2], z[3], pc.alpha[0], r_j) +
+      pc.beta[0] * r_next;
+  const double y1d =
+      affine4(pc.phi[4], pc.phi[5], pc.phi[6], pc.phi[7], z[0], z[1], z[2], z[3], pc.alpha[1], r_j) +
+      pc.beta[1] * r_next;
   const double dr = r_next - r_j;
   const double r = r_j + f * dr;
   const double slope = dr / c.step_s;
@@ -143,7 +146,8 @@ void initial_z(const TruckCoefficients& c, double r0, double* z) {
 
 void check_path(const WheelPath& path, const std::string& who) {
   if (path.line_a == nullptr || path.line_b == nullptr)
-    throw std::invalid_argument(std::string(kFn) + ": " + who + "WheelPath has a null line (line_a or line_b)");
+    throw std::invalid_argument(std::string(kFn) + ": " + who +
+                                "WheelPath has a null line (line_a or line_b)");
   check_in_range(kFn, who + "WheelPath::weight_b", path.weight_b, 0.0, 1.0);
 }
 
@@ -174,16 +178,75 @@ struct alignas(64) BlockState {
   double r[kChunk + 1][BS];
 };
 
-// Fills s.r rows 0..n with heights at samples k..k+n.
+// Fills s.r rows 0..n with heights at samples k..k+n: a transpose from per-truck lines to
+// [sample][truck]. Done element by element it costs as much as a third of the steps themselves,
+// so on GCC it computes W samples of W trucks as W short vectors along the lines and transposes
+// them in registers (W = 4 with AVX, 2 with SSE2); the heights are the same expression, so the
+// bits are those of path_height().
 template <int BS>
-void load_heights(BlockState<BS>& s, Eigen::Index k, int n) {
+void load_heights_scalar(BlockState<BS>& s, Eigen::Index k, int first, int n) {
   for (int t = 0; t < BS; ++t) {
     const double* la = s.la[t];
     const double* lb = s.lb[t];
     const double wa = s.wa[t], wb = s.wb[t];
-    for (int i = 0; i <= n; ++i) s.r[i][t] = path_height(la, lb, wa, wb, k + i);
+    for (int i = first; i <= n; ++i) s.r[i][t] = path_height(la, lb, wa, wb, k + i);
   }
 }
+
+#if defined(__GNUC__) && !defined(__clang__)
+#if defined(__AVX__)
+constexpr int kTransposeWidth = 4;
+#else
+constexpr int kTransposeWidth = 2;
+#endif
+using VecW = double __attribute__((vector_size(8 * kTransposeWidth)));
+using IdxW = long long __attribute__((vector_size(8 * kTransposeWidth)));
+
+inline VecW load_vec(const double* p) {
+  VecW v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+template <int BS>
+void load_heights(BlockState<BS>& s, Eigen::Index k, int n) {
+  constexpr int W = kTransposeWidth;
+  static_assert(BS % W == 0, "block must be a multiple of the transpose width");
+  const int full = (n + 1) / W * W;
+  for (int t = 0; t < BS; t += W) {
+    VecW rows[W];
+    for (int i = 0; i < full; i += W) {
+      for (int u = 0; u < W; ++u)
+        rows[u] = s.wa[t + u] * load_vec(s.la[t + u] + k + i) + s.wb[t + u] * load_vec(s.lb[t + u] + k + i);
+#if defined(__AVX__)
+      const VecW t0 = __builtin_shuffle(rows[0], rows[1], IdxW{0, 4, 2, 6});
+      const VecW t1 = __builtin_shuffle(rows[0], rows[1], IdxW{1, 5, 3, 7});
+      const VecW t2 = __builtin_shuffle(rows[2], rows[3], IdxW{0, 4, 2, 6});
+      const VecW t3 = __builtin_shuffle(rows[2], rows[3], IdxW{1, 5, 3, 7});
+      const VecW c0 = __builtin_shuffle(t0, t2, IdxW{0, 1, 4, 5});
+      const VecW c1 = __builtin_shuffle(t1, t3, IdxW{0, 1, 4, 5});
+      const VecW c2 = __builtin_shuffle(t0, t2, IdxW{2, 3, 6, 7});
+      const VecW c3 = __builtin_shuffle(t1, t3, IdxW{2, 3, 6, 7});
+      std::memcpy(&s.r[i][t], &c0, sizeof c0);
+      std::memcpy(&s.r[i + 1][t], &c1, sizeof c1);
+      std::memcpy(&s.r[i + 2][t], &c2, sizeof c2);
+      std::memcpy(&s.r[i + 3][t], &c3, sizeof c3);
+#else
+      const VecW c0 = __builtin_shuffle(rows[0], rows[1], IdxW{0, 2});
+      const VecW c1 = __builtin_shuffle(rows[0], rows[1], IdxW{1, 3});
+      std::memcpy(&s.r[i][t], &c0, sizeof c0);
+      std::memcpy(&s.r[i + 1][t], &c1, sizeof c1);
+#endif
+    }
+  }
+  load_heights_scalar(s, k, full, n);
+}
+#else
+template <int BS>
+void load_heights(BlockState<BS>& s, Eigen::Index k, int n) {
+  load_heights_scalar(s, k, 0, n);
+}
+#endif
 
 // n steps from the sample in row 0 of s.r; the inner loop over trucks vectorises.
 template <int BS, bool Damped>
@@ -195,8 +258,10 @@ void advance(BlockState<BS>& s, int n) {
     for (int t = 0; t < BS; ++t) {
       const double z0 = s.z[0][t], z1 = s.z[1][t], z2 = s.z[2][t], z3 = s.z[3][t];
       const double rt = r0[t];
-      const double n0 = affine4(s.phi[0][t], s.phi[1][t], s.phi[2][t], s.phi[3][t], z0, z1, z2, z3, s.gamma[0][t], rt);
-      const double n1 = affine4(s.phi[4][t], s.phi[5][t], s.phi[6][t], s.phi[7][t], z0, z1, z2, z3, s.gamma[1][t], rt);
+      const double n0 =
+          affine4(s.phi[0][t], s.phi[1][t], s.phi[2][t], s.phi[3][t], z0, z1, z2, z3, s.gamma[0][t], rt);
+      const double n1 =
+          affine4(s.phi[4][t], s.phi[5][t], s.phi[6][t], s.phi[7][t], z0, z1, z2, z3, s.gamma[1][t], rt);
       const double n2 =
           affine4(s.phi[8][t], s.phi[9][t], s.phi[10][t], s.phi[11][t], z0, z1, z2, z3, s.gamma[2][t], rt);
       const double n3 =
@@ -273,7 +338,8 @@ PassExtremes PassIntegrator::run(const QuarterCar& car, double speed_mps, const 
   check_path(path, "");
   if (if_out.size() != static_cast<Eigen::Index>(positions_m_.size()))
     throw std::invalid_argument(std::string(kFn) + "::run(): if_out has " + std::to_string(if_out.size()) +
-                                " entries but there are " + std::to_string(positions_m_.size()) + " positions");
+                                " entries but there are " + std::to_string(positions_m_.size()) +
+                                " positions");
 
   std::array<PartialCoefficients, 64> partial_small;
   std::vector<PartialCoefficients> partial_large;
@@ -300,10 +366,14 @@ PassExtremes PassIntegrator::run(const QuarterCar& car, double speed_mps, const 
     const Eigen::Index target = position_sample_[o];
     for (; k < target; ++k) {
       const double r_next = path_height(la, lb, wa, wb, k + 1);
-      const double n0 = affine4(c.phi[0], c.phi[1], c.phi[2], c.phi[3], z[0], z[1], z[2], z[3], c.gamma[0], r_k);
-      const double n1 = affine4(c.phi[4], c.phi[5], c.phi[6], c.phi[7], z[0], z[1], z[2], z[3], c.gamma[1], r_k);
-      const double n2 = affine4(c.phi[8], c.phi[9], c.phi[10], c.phi[11], z[0], z[1], z[2], z[3], c.gamma[2], r_k);
-      const double n3 = affine4(c.phi[12], c.phi[13], c.phi[14], c.phi[15], z[0], z[1], z[2], z[3], c.gamma[3], r_k);
+      const double n0 =
+          affine4(c.phi[0], c.phi[1], c.phi[2], c.phi[3], z[0], z[1], z[2], z[3], c.gamma[0], r_k);
+      const double n1 =
+          affine4(c.phi[4], c.phi[5], c.phi[6], c.phi[7], z[0], z[1], z[2], z[3], c.gamma[1], r_k);
+      const double n2 =
+          affine4(c.phi[8], c.phi[9], c.phi[10], c.phi[11], z[0], z[1], z[2], z[3], c.gamma[2], r_k);
+      const double n3 =
+          affine4(c.phi[12], c.phi[13], c.phi[14], c.phi[15], z[0], z[1], z[2], z[3], c.gamma[3], r_k);
       z[0] = n0;
       z[1] = n1;
       z[2] = n2;
@@ -344,11 +414,13 @@ void PassIntegrator::run_batch(const QuarterCarBatch& cars, const Eigen::ArrayXd
   if (cars.tyre_stiffness_npm.size() != n) fail_size("tyre_stiffness_npm", cars.tyre_stiffness_npm.size());
   if (cars.tyre_damping_nspm.size() != n) fail_size("tyre_damping_nspm", cars.tyre_damping_nspm.size());
   if (speed_mps.size() != n) fail_size("speed_mps", speed_mps.size());
-  if (static_cast<Eigen::Index>(paths.size()) != n) fail_size("paths", static_cast<Eigen::Index>(paths.size()));
+  if (static_cast<Eigen::Index>(paths.size()) != n)
+    fail_size("paths", static_cast<Eigen::Index>(paths.size()));
   if (if_out.cols() != n) fail_size("if_out (columns)", if_out.cols());
   if (if_out.rows() != static_cast<Eigen::Index>(positions_m_.size()))
-    throw std::invalid_argument(std::string(kFn) + "::run_batch(): if_out has " + std::to_string(if_out.rows()) +
-                                " rows but there are " + std::to_string(positions_m_.size()) + " positions");
+    throw std::invalid_argument(std::string(kFn) + "::run_batch(): if_out has " +
+                                std::to_string(if_out.rows()) + " rows but there are " +
+                                std::to_string(positions_m_.size()) + " positions");
   for (Eigen::Index i = 0; i < n; ++i) {
     const std::string who = truck_label(i);
     validate_truck(cars.car(i), who);
@@ -421,8 +493,9 @@ void PassIntegrator::run_batch(const QuarterCarBatch& cars, const Eigen::ArrayXd
           m = grid_if_minus_one<true>(c.c_r, c.e, c.a, c.b, r_k, r_before, z[0], z[1]);
         } else {
           const double r_next = path_height(s.la[t], s.lb[t], s.wa[t], s.wb[t], k + 1);
-          m = partial_if_minus_one(c, partial[static_cast<std::size_t>(t) * nfrac + static_cast<std::size_t>(slot)],
-                                   position_fraction_[o], z, r_k, r_next);
+          m = partial_if_minus_one(
+              c, partial[static_cast<std::size_t>(t) * nfrac + static_cast<std::size_t>(slot)],
+              position_fraction_[o], z, r_k, r_next);
           s.min_m[t] = m < s.min_m[t] ? m : s.min_m[t];
         }
         if_out(static_cast<Eigen::Index>(o), b0 + t) = 1.0 + m;

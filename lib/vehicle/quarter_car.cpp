@@ -16,7 +16,8 @@ void check_batch_index(const QuarterCarBatch& b, Eigen::Index i, const char* fn)
   if (b.unsprung_mass_kg.size() != n || b.suspension_stiffness_npm.size() != n ||
       b.suspension_damping_nspm.size() != n || b.tyre_stiffness_npm.size() != n ||
       b.tyre_damping_nspm.size() != n)
-    throw std::invalid_argument(std::string(fn) + ": the batch's arrays differ in length (sprung_mass_kg has " +
+    throw std::invalid_argument(std::string(fn) +
+                                ": the batch's arrays differ in length (sprung_mass_kg has " +
                                 std::to_string(n) + ")");
   if (i < 0 || i >= n)
     throw std::out_of_range(std::string(fn) + ": index " + std::to_string(i) + " outside [0, " +
@@ -45,11 +46,11 @@ StateSpace state_space(const QuarterCar& car) {
   // x = (y1, y1', y2, y2'), u = (r, r').
   // m1 y1'' = k (y2 - y1) + c_b (y2' - y1') - k_t (y1 - r) - c_t (y1' - r')
   // m2 y2'' = -k (y2 - y1) - c_b (y2' - y1')
-  ss.A << 0.0, 1.0, 0.0, 0.0,                                   //
-      -(k + kt) / m1, -(cb + ct) / m1, k / m1, cb / m1,         //
-      0.0, 0.0, 0.0, 1.0,                                       //
+  ss.A << 0.0, 1.0, 0.0, 0.0,                            //
+      -(k + kt) / m1, -(cb + ct) / m1, k / m1, cb / m1,  //
+      0.0, 0.0, 0.0, 1.0,                                //
       k / m2, cb / m2, -k / m2, -cb / m2;
-  ss.B << 0.0, 0.0,  //
+  ss.B << 0.0, 0.0,      //
       kt / m1, ct / m1,  //
       0.0, 0.0,          //
       0.0, 0.0;
