@@ -30,7 +30,7 @@ TEST_CASE("ssrfleet simulate writes a WIM log that reads back with one record pe
         test::read_text(dir.file("log.csv")).substr(test::read_text(dir.file("log.csv")).find('\n')));
 }
 
-TEST_CASE("ssrfleet simulate refuses bad input with file, line and field and leaves no output", "[cli]") {
+TEST_CASE("ssrfleet simulate refuses bad input with file line and field and leaves no output", "[cli]") {
   test::TempDir dir;
   const std::string out = dir.file("out.csv");
   const std::string header = "truck_id,speed_mps,sprung_mass_kg,k_npm,kt_npm,z_m\n";

@@ -55,7 +55,7 @@ TEST_CASE("a drawn fleet has the Table 1 means and standard deviations within Mo
         moments(trucks, [](const fleet::Truck& t) { return t.lateral_m; }));
 }
 
-TEST_CASE("lateral positions are truncated to the road surface, and the draw is reproducible", "[fleet]") {
+TEST_CASE("lateral positions are truncated to the road surface and the draw is reproducible", "[fleet]") {
   fleet::FleetDistribution d;
   d.lateral_m = {0.2, 1.0};  // much of the mass is off a road that starts at 0
   const auto a = fleet::draw_fleet(d, 2000, 0.0, 5.0, 7);

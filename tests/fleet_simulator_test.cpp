@@ -4,7 +4,7 @@
 
 #include "fleet/fleet_distribution.hpp"
 #include "fleet/simulator.hpp"
-#include "road/surface_generator.hpp"
+#include "road/surface_presets.hpp"
 #include "site/road_source.hpp"
 #include "site/site.hpp"
 
@@ -34,7 +34,7 @@ TEST_CASE("the Table 1 fleet on AS1 gives mean IF near 1 and an air-suspension d
   CHECK(log.lift_offs == 0);
 }
 
-TEST_CASE("noise is N(0, sigma^2) on top of the exact model output, from its own stream", "[fleet][simulate]") {
+TEST_CASE("noise is Gaussian with sd sigma on top of the exact model output and has its own stream", "[fleet][simulate]") {
   const site::Site site(site::load_road("AS1"), site::SiteOptions{});
   const auto trucks = fleet::draw_fleet(fleet::FleetDistribution{}, 400, site.lateral_min_m(), site.lateral_max_m(), 3);
   const double sigma = 0.02;

@@ -117,7 +117,7 @@ TEST_CASE("a header missing a required column names the column", "[io]") {
   }
 }
 
-TEST_CASE("every kind of bad WIM record is rejected with its line and field, and good ones pass", "[io]") {
+TEST_CASE("every kind of bad WIM record is rejected with its line and field while good ones pass", "[io]") {
   const std::string text = std::string(kHeader) +
                            "G1,0,20,4000,1.0,1.01,0.99\n"        // line 2 good
                            "B1,1,20,4000,1.0,1.01\n"             // 3 ragged
@@ -148,7 +148,7 @@ TEST_CASE("every kind of bad WIM record is rejected with its line and field, and
   }
 }
 
-TEST_CASE("reading a whole log stops at the first bad record, naming file, line and field", "[io]") {
+TEST_CASE("reading a whole log stops at the first bad record naming file line and field", "[io]") {
   test::TempDir dir;
   const std::string path = dir.file("log.csv");
   test::write_text(path, std::string(kHeader) + "G1,0,20,4000,1,1,1\nB1,1,20,4000,1,oops,1\n");

@@ -4,6 +4,7 @@
 #include <limits>
 #include <string>
 
+#include "fleet/truncated_samplers.hpp"
 #include "smc/rng.hpp"
 #include "util/errors.hpp"
 
@@ -260,6 +261,47 @@ void FleetTarget::resample(const std::vector<Eigen::Index>& ancestors) {
   latents_ = latents_(Eigen::all, ancestors).eval();
   ssr_ = ssr_(Eigen::all, ancestors).eval();
   sums_ = sums_(Eigen::all, ancestors).eval();
+}
+
+void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
+                               Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) {
+  const Eigen::Index newest = trucks() - 1;
+  const double n_all = static_cast<double>(trucks());  // the newest truck's latents are in γ in full
+  const auto& prior = options_.prior;
+  parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+      HyperVector t = theta_of(i);
+      const double* s = sums_.col(i).data();
+      const double* x = latents_.col(i).data() + 3 * newest;
+      // Sums over all n+1 latents (older ones from the running sums, plus the newest).
+      const double sk = s[kSumK] + x[kStiffness], sk2 = s[kSumK2] + x[kStiffness] * x[kStiffness];
+      const double skt = s[kSumKt] + x[kTyreStiffness], skt2 = s[kSumKt2] + x[kTyreStiffness] * x[kTyreStiffness];
+      t[kK] = draw_truncated_normal(rng, sk / n_all, t[kSigmaK] / std::sqrt(n_all), prior.lo[kK], prior.hi[kK]);
+      t[kKt] = draw_truncated_normal(rng, skt / n_all, t[kSigmaKt] / std::sqrt(n_all), prior.lo[kKt], prior.hi[kKt]);
+      if (trucks() >= 2) {
+        const double ssk = std::max(0.0, sk2 - 2.0 * t[kK] * sk + n_all * t[kK] * t[kK]);
+        const double sskt = std::max(0.0, skt2 - 2.0 * t[kKt] * skt + n_all * t[kKt] * t[kKt]);
+        t[kSigmaK] = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), ssk, prior.lo[kSigmaK], prior.hi[kSigmaK]);
+        t[kSigmaKt] = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), sskt, prior.lo[kSigmaKt], prior.hi[kSigmaKt]);
+      }
+      // σ_IF: older trucks' likelihoods count in full, the newest one's at power φ, so the
+      // precision is Gamma((M(n+φ) - 1)/2, (ΣSSR + φ SSR_new)/2) on the box.
+      const double ssr_new = ssr_(newest, i);
+      if (std::isfinite(ssr_new) && std::isfinite(s[kSumSsr])) {
+        const double a = sensors_ * (n_all - 1.0 + phi);
+        const double shape = 0.5 * (a - 1.0), rate = 0.5 * (s[kSumSsr] + phi * ssr_new);
+        if (shape > 0.0 && rate > 0.0) {
+          const double lo_sd = prior.lo[kSigmaIf], hi_sd = prior.hi[kSigmaIf];
+          const double tau = draw_truncated_gamma(rng, shape, rate, 1.0 / (hi_sd * hi_sd), 1.0 / (lo_sd * lo_sd));
+          t[kSigmaIf] = std::clamp(1.0 / std::sqrt(tau), lo_sd, hi_sd);
+        }
+      }
+      for (int j = 0; j < kHyperCount; ++j) theta_(j, i) = t[j];
+      log_base[i] = base_density(i, t, s, x);
+      loglik[i] = newest_loglik(ssr_new, t[kSigmaIf]);
+    }
+  });
 }
 
 }  // namespace ssrfleet::fleet

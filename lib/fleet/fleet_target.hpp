@@ -60,6 +60,11 @@ class FleetTarget final : public smc::TemperedModel {
   void accept(int block, const std::vector<char>& accepted,
               const Eigen::Ref<const Eigen::MatrixXd>& proposed) override;
   void resample(const std::vector<Eigen::Index>& ancestors) override;
+  // Exact Gibbs draws of K, sigma_k, K_t, sigma_kt and sigma_IF given the latents (their
+  // conditionals stay standard under the uniform box, truncated_samplers.hpp): they decouple θ
+  // from the latents far better than a random walk on θ alone.
+  void custom_moves(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
+                    Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) override;
 
  private:
   // Running sums over the trucks before the newest (index < trucks()-1), per particle.

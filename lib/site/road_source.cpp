@@ -1,7 +1,7 @@
 #include "site/road_source.hpp"
 
 #include "road/surface_csv.hpp"
-#include "road/surface_generator.hpp"
+#include "road/surface_presets.hpp"
 
 namespace ssrfleet::site {
 

@@ -27,6 +27,10 @@ struct WheelPath {
   double weight_b = 0.0;
 };
 
+// run_batch() advances trucks in blocks of this many, in lock-step (the benchmark's floor kernel
+// uses the same block so the comparison is like for like).
+inline constexpr int batch_block_trucks = 16;
+
 // Per-pass extra output: the minimum IF over the whole pass (start to last output position).
 // IF < 0 means the tyre force went negative (wheel lift-off): reported, never hidden.
 struct PassExtremes {
@@ -63,6 +67,10 @@ class PassIntegrator {
   // it and the fraction of a step beyond it.
   std::vector<Eigen::Index> position_sample_;
   std::vector<double> position_fraction_;
+  // The distinct non-zero fractions (one partial-step discretisation per truck for each), and per
+  // position the index into it, or -1 for a position on the sample grid.
+  std::vector<double> distinct_fractions_;
+  std::vector<int> position_fraction_slot_;
 };
 
 }  // namespace ssrfleet::vehicle
