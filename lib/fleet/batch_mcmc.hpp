@@ -71,7 +71,7 @@ struct BatchMcmcOptions {
   double target_acceptance = 0.3;  // per-truck latent acceptance the burn-in adapts towards
   int z_moves_per_sweep = 10;      // (Z, sigma_z) random-walk MH steps per sweep
   double init_grid_step_m = 0.1;   // grid step of the initial z search
-  int hold_theta_sweeps = 100;     // theta fixed for these first sweeps (<= burn_in)
+  int hold_theta_sweeps = 100;     // theta fixed for the first min(this, burn_in) sweeps
 
   // Progress: called every `progress_every` sweeps (0 = never) and after the last one.
   int progress_every = 0;

@@ -75,4 +75,11 @@ std::vector<ParameterSummary> summarize_draws(const Eigen::Ref<const Eigen::Matr
   return out;
 }
 
+std::vector<ParameterSummary> summarise_weighted(const Eigen::Ref<const Eigen::MatrixXd>& draws_by_column,
+                                                 const Eigen::Ref<const Eigen::ArrayXd>& weights) {
+  const Eigen::MatrixXd draws = draws_by_column.transpose();
+  const Eigen::VectorXd w = weights.matrix();
+  return summarize_draws(draws, &w);
+}
+
 }  // namespace ssrfleet::fleet

@@ -30,4 +30,9 @@ double weighted_quantile(const Eigen::Ref<const Eigen::VectorXd>& values,
 std::vector<ParameterSummary> summarize_draws(const Eigen::Ref<const Eigen::MatrixXd>& draws,
                                               const Eigen::VectorXd* weights = nullptr);
 
+// The same for a particle cloud laid out as PosteriorCloud has it (posterior_cloud.hpp): one
+// column per draw, one row per quantity, and one weight per column.
+std::vector<ParameterSummary> summarise_weighted(const Eigen::Ref<const Eigen::MatrixXd>& draws_by_column,
+                                                 const Eigen::Ref<const Eigen::ArrayXd>& weights);
+
 }  // namespace ssrfleet::fleet

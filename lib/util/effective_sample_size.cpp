@@ -32,7 +32,7 @@ Eigen::VectorXd autocovariance(const Eigen::Ref<const Eigen::VectorXd>& chain, E
   return acov;
 }
 
-double effective_sample_size(const Eigen::Ref<const Eigen::VectorXd>& chain) {
+double chain_effective_sample_size(const Eigen::Ref<const Eigen::VectorXd>& chain) {
   const Eigen::Index n = chain.size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (n < 4 || !chain.allFinite()) return nan;

@@ -19,6 +19,6 @@ Eigen::VectorXd autocovariance(const Eigen::Ref<const Eigen::VectorXd>& chain, E
 // ESS of the chain. NaN for a chain shorter than 4 draws or a constant chain (no information
 // about the spread, and NaN compares false against any threshold). The estimate is capped at
 // n log10(n) (as Stan does), since antithetic chains can otherwise report absurd values.
-double effective_sample_size(const Eigen::Ref<const Eigen::VectorXd>& chain);
+double chain_effective_sample_size(const Eigen::Ref<const Eigen::VectorXd>& chain);
 
 }  // namespace ssrfleet
