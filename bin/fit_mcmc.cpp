@@ -1,8 +1,9 @@
-#include <cmath>
+#include <algorithm>
 #include <iomanip>
 
 #include "fit_methods.hpp"
 #include "fleet/batch_mcmc.hpp"
+#include "fleet/batch_mcmc_cloud.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::cli {
@@ -30,23 +31,7 @@ fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<io::Wim
   if (!o.IsValid(&why)) throw UsageError(why);
   const fleet::BatchMcmcResult r = fleet::run_batch_mcmc(site, records, o);
 
-  fleet::PosteriorCloud c;
-  c.method = "mcmc";
-  c.theta = r.theta_draws.transpose();
-  c.weights = Eigen::ArrayXd::Constant(c.theta.cols(), 1.0 / static_cast<double>(c.theta.cols()));
-  for (const auto& rec : records) {
-    c.speed_mps.push_back(rec.speed_mps);
-    c.sprung_mass_kg.push_back(rec.sprung_mass_kg);
-  }
-  c.site_fingerprint = site.fingerprint();
-  c.road_name = site.surface().name;
-  c.sensors = site.sensors();
-  c.lateral_min_m = site.lateral_min_m();
-  c.lateral_max_m = site.lateral_max_m();
-  c.trucks_seen = static_cast<long>(records.size());
-  c.ess = static_cast<double>(c.theta.cols());  // draws kept; autocorrelation not accounted for
-  c.log_evidence = NAN;
-  return c;
+  return fleet::to_posterior_cloud(r, site, records);
 }
 
 }  // namespace ssrfleet::cli
