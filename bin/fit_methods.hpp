@@ -23,6 +23,7 @@ struct FitFlags {
   long iterations = 20000;  // mcmc
   long burn_in = 5000;      // mcmc
   long thin = 10;           // mcmc
+  bool verbose = false;     // one line per tempering step
 
   void add_to(boost::program_options::options_description& desc);
 };

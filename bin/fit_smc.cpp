@@ -18,7 +18,8 @@ void FitFlags::add_to(po::options_description& desc) {
       ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
       ("rejuvenate", po::value(&rejuvenate)->default_value(rejuvenate), "older trucks whose latents are moved per new truck")
       ("cess", po::value(&cess_target)->default_value(cess_target), "conditional-ESS target of each tempering step, in (0, 1)")
-      ("max-sweeps", po::value(&max_sweeps)->default_value(max_sweeps), "MCMC sweeps per tempering step at most");
+      ("max-sweeps", po::value(&max_sweeps)->default_value(max_sweeps), "MCMC sweeps per tempering step at most")
+      ("verbose", po::bool_switch(&verbose), "report every tempering step (phi, ESS, acceptance and jump per block)");
   po::options_description mcmc("MCMC options (--method mcmc)");
   mcmc.add_options()
       ("iterations", po::value(&iterations)->default_value(iterations), "MCMC sweeps in all")
@@ -40,6 +41,7 @@ fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<io::WimR
   if (!o.sampler.IsValid(&why)) throw UsageError(why);
   fleet::FleetSmc smc(site, o);
   const std::size_t n = records.size();
+  const bool verbose_report = flags.verbose;
   for (std::size_t t = 0; t < n; ++t) {
     const auto& stage = smc.absorb(records[t]);
     if (progress) {
@@ -52,6 +54,7 @@ fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<io::WimR
                 << " steps, ESS " << std::fixed << std::setprecision(0) << smc.sampler().ess() << "/" << flags.particles
                 << ", acceptance " << std::setprecision(2) << (blocks ? acc / blocks : 0.0) << ", "
                 << std::setprecision(3) << stage.wall_time_s << " s\n";
+      if (verbose_report) *progress << stage.FullReport();
     }
   }
   return smc.cloud();

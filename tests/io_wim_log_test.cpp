@@ -69,7 +69,8 @@ TEST_CASE("a WIM log round-trips bit-exactly through write and read", "[io]") {
   records[0].truck_id = "A";
   records[0].speed_mps = 23.43000000000001;
   records[0].sprung_mass_kg = 4450.123456789;
-  records[0].impact_factor = Eigen::Vector3d(1.0 / 3.0, 0.98765432101234567, 1.2);
+  records[0].impact_factor.resize(3);
+  records[0].impact_factor << 1.0 / 3.0, 0.98765432101234567, 1.2;
   records[1] = records[0];
   records[1].truck_id = "B";
   records[1].impact_factor[1] = 1.0 + 1e-16;

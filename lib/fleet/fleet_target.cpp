@@ -12,8 +12,10 @@ namespace ssrfleet::fleet {
 
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr int kThetaBlock = 0;
-constexpr int kNewestBlock = 1;
+// MH blocks: the newest truck's latents, then the rejuvenated older trucks'. θ moves by Gibbs
+// (custom_moves), which mixes far better than a random walk on θ alone.
+constexpr int kNewestBlock = 0;
+constexpr int kFirstOlderBlock = 1;
 
 // Standard normal by Box-Muller on the counter-based stream (fixed forever, like uniform01).
 double standard_normal(smc::Rng& rng) {
@@ -181,19 +183,18 @@ void FleetTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Ei
 }
 
 std::vector<smc::BlockSpec> FleetTarget::blocks() const {
-  std::vector<smc::BlockSpec> b = {{"theta", kHyperCount}, {"truck " + std::to_string(trucks()) + " (newest)", 3}};
+  std::vector<smc::BlockSpec> b = {{"truck " + std::to_string(trucks()) + " (newest)", 3}};
   for (Eigen::Index j : rejuvenated_) b.push_back({"truck " + std::to_string(j + 1), 3});
   return b;
 }
 
 Eigen::Index FleetTarget::block_truck(int block) const {
   if (block == kNewestBlock) return trucks() - 1;
-  return rejuvenated_.at(static_cast<std::size_t>(block - 2));
+  return rejuvenated_.at(static_cast<std::size_t>(block - kFirstOlderBlock));
 }
 
 void FleetTarget::get_block(int block, Eigen::Ref<Eigen::MatrixXd> values) const {
-  if (block == kThetaBlock) values = theta_;
-  else values = latents_.middleRows(3 * block_truck(block), 3);
+  values = latents_.middleRows(3 * block_truck(block), 3);
 }
 
 void FleetTarget::log_density_at(int block, const Eigen::Ref<const Eigen::MatrixXd>& proposed,
@@ -201,15 +202,6 @@ void FleetTarget::log_density_at(int block, const Eigen::Ref<const Eigen::Matrix
                                  const smc::ParallelFor& parallel) {
   const Eigen::Index P = options_.particles;
   const Eigen::Index newest = trucks() - 1;
-  if (block == kThetaBlock) {
-    for (Eigen::Index i = 0; i < P; ++i) {
-      HyperVector t;
-      for (int j = 0; j < kHyperCount; ++j) t[j] = proposed(j, i);
-      log_base[i] = base_density(i, t, sums_.col(i).data(), latents_.col(i).data() + 3 * newest);
-      loglik[i] = log_base[i] == -kInf ? -kInf : newest_loglik(ssr_(newest, i), t[kSigmaIf]);
-    }
-    return;
-  }
   const Eigen::Index truck = block_truck(block);
   proposed_ssr_.resize(P);
   residuals(truck, proposed, proposed_ssr_, parallel);
@@ -241,12 +233,6 @@ void FleetTarget::log_density_at(int block, const Eigen::Ref<const Eigen::Matrix
 
 void FleetTarget::accept(int block, const std::vector<char>& accepted, const Eigen::Ref<const Eigen::MatrixXd>& proposed) {
   const Eigen::Index P = options_.particles;
-  if (block == kThetaBlock) {
-    for (Eigen::Index i = 0; i < P; ++i) {
-      if (accepted[static_cast<std::size_t>(i)]) theta_.col(i) = proposed.col(i);
-    }
-    return;
-  }
   const Eigen::Index truck = block_truck(block);
   for (Eigen::Index i = 0; i < P; ++i) {
     if (!accepted[static_cast<std::size_t>(i)]) continue;
@@ -284,6 +270,24 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
         const double sskt = std::max(0.0, skt2 - 2.0 * t[kKt] * skt + n_all * t[kKt] * t[kKt]);
         t[kSigmaK] = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), ssk, prior.lo[kSigmaK], prior.hi[kSigmaK]);
         t[kSigmaKt] = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), sskt, prior.lo[kSigmaKt], prior.hi[kSigmaKt]);
+      }
+      // (Z, σ_z): the Gaussian part of their conditional is standard; the truncation to the road
+      // adds m(Z, σ_z)^-N (m = the road's share of N(Z, σ_z²)). Propose from the Gaussian part
+      // on the prior box and accept with the ratio of m^-N: exact MH, accepting almost always.
+      const double sz = s[kSumZ] + x[kLateral], sz2 = s[kSumZ2] + x[kLateral] * x[kLateral];
+      const auto log_mass = [&](double mean, double sd) {
+        return log_normal_mass(lateral_.lo_m, lateral_.hi_m, mean, sd);
+      };
+      {
+        const double z_new = draw_truncated_normal(rng, sz / n_all, t[kSigmaZ] / std::sqrt(n_all), prior.lo[kZ], prior.hi[kZ]);
+        const double log_accept = n_all * (log_mass(t[kZ], t[kSigmaZ]) - log_mass(z_new, t[kSigmaZ]));
+        if (std::log(uniform_open01(rng)) < log_accept) t[kZ] = z_new;
+      }
+      if (trucks() >= 2) {
+        const double ssz = std::max(0.0, sz2 - 2.0 * t[kZ] * sz + n_all * t[kZ] * t[kZ]);
+        const double sd_new = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), ssz, prior.lo[kSigmaZ], prior.hi[kSigmaZ]);
+        const double log_accept = n_all * (log_mass(t[kZ], t[kSigmaZ]) - log_mass(t[kZ], sd_new));
+        if (std::log(uniform_open01(rng)) < log_accept) t[kSigmaZ] = sd_new;
       }
       // σ_IF: older trucks' likelihoods count in full, the newest one's at power φ, so the
       // precision is Gamma((M(n+φ) - 1)/2, (ΣSSR + φ SSR_new)/2) on the box.

@@ -6,8 +6,9 @@
 // so far, with each truck's sum of squared residuals cached so θ moves need no integrator call.
 // When truck n+1 arrives (add_truck), every particle is extended with latents drawn from
 // p(x | θ), so the stage's incremental weight is the new truck's likelihood alone; the engine
-// tempers it in. The MH blocks of a stage are θ, the new truck's latents, and a rotating handful
-// of older trucks' latents (rejuvenation, so their paths do not collapse onto a few ancestors).
+// tempers it in. The random-walk MH blocks of a stage are the new truck's latents and a rotating
+// handful of older trucks' latents (rejuvenation, so their paths do not collapse onto a few
+// ancestors); θ moves by Gibbs and exact independence MH in custom_moves.
 //
 // Stage base density (log γ, DESIGN.md §4):
 //   log p(θ) + Σ_{i≤n} [log p(x_i | θ) + log p(y_i | x_i, σ_IF)] + log p(x_{n+1} | θ)
@@ -60,9 +61,9 @@ class FleetTarget final : public smc::TemperedModel {
   void accept(int block, const std::vector<char>& accepted,
               const Eigen::Ref<const Eigen::MatrixXd>& proposed) override;
   void resample(const std::vector<Eigen::Index>& ancestors) override;
-  // Exact Gibbs draws of K, sigma_k, K_t, sigma_kt and sigma_IF given the latents (their
-  // conditionals stay standard under the uniform box, truncated_samplers.hpp): they decouple θ
-  // from the latents far better than a random walk on θ alone.
+  // θ given the latents: exact Gibbs draws of K, sigma_k, K_t, sigma_kt and sigma_IF (their
+  // conditionals stay standard under the uniform box, truncated_samplers.hpp), and for Z and
+  // sigma_z an independence MH whose proposal is their conditional without the road truncation.
   void custom_moves(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
                     Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) override;
 

@@ -58,6 +58,16 @@ Eigen::MatrixXd proposal_covariance(const Eigen::Ref<const Eigen::MatrixXd>& X,
   return (scale * scale / static_cast<double>(d)) * cov;
 }
 
+double tuned_scale_factor(double factor, double acceptance) {
+  if (acceptance < 0.001) return factor * 0.1;
+  if (acceptance < 0.05) return factor * 0.5;
+  if (acceptance < 0.2) return factor * 0.9;
+  if (acceptance > 0.95) return factor * 10.0;
+  if (acceptance > 0.75) return factor * 2.0;
+  if (acceptance > 0.5) return factor * 1.1;
+  return factor;
+}
+
 MhSummary mh_moves(TemperedModel& model, double phi, const Eigen::Ref<const Eigen::ArrayXd>& W,
                    Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
                    const RngFactory& rngs, const ParallelFor& parallel, const MhOptions& options,
@@ -97,6 +107,7 @@ MhSummary mh_moves(TemperedModel& model, double phi, const Eigen::Ref<const Eige
   Eigen::ArrayXd new_base(P), new_loglik(P), log_u(P);
   std::vector<char> accepted(static_cast<std::size_t>(P));
   std::vector<double> accepted_sum(nb, 0.0);
+  std::vector<double> factor(nb, 1.0);
 
   for (int sweep = 0; sweep < options.max_steps; ++sweep) {
     for (std::size_t b = 0; b < nb; ++b) {
@@ -105,7 +116,7 @@ MhSummary mh_moves(TemperedModel& model, double phi, const Eigen::Ref<const Eige
       proposed.resize(d, P);
       model.get_block(static_cast<int>(b), current);
       const RngFactory block_rngs = rngs.child(static_cast<std::uint64_t>(sweep), static_cast<std::uint64_t>(b));
-      const Eigen::MatrixXd& L = chol_proposal[b];
+      const Eigen::MatrixXd L = factor[b] * chol_proposal[b];
       parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
         boost::random::normal_distribution<double> normal;
         Eigen::VectorXd z(d);
@@ -130,7 +141,9 @@ MhSummary mh_moves(TemperedModel& model, double phi, const Eigen::Ref<const Eige
         }
       }
       model.accept(static_cast<int>(b), accepted, proposed);
-      accepted_sum[b] += static_cast<double>(n_accepted) / static_cast<double>(P);
+      const double rate = static_cast<double>(n_accepted) / static_cast<double>(P);
+      accepted_sum[b] += rate;
+      if (options.adapt_scale) factor[b] = tuned_scale_factor(factor[b], rate);
     }
     model.custom_moves(phi, rngs.child(static_cast<std::uint64_t>(sweep), kCustomMovesKey), parallel, log_base,
                        loglik);
@@ -150,6 +163,7 @@ MhSummary mh_moves(TemperedModel& model, double phi, const Eigen::Ref<const Eige
     if (summary.sweeps >= options.min_steps && far_enough) break;
   }
   for (std::size_t b = 0; b < nb; ++b) summary.acceptance[b] = accepted_sum[b] / summary.sweeps;
+  summary.scale_factor = factor;
   return summary;
 }
 

@@ -34,6 +34,12 @@ struct MhOptions {
   double jump_target = 0.5;  // in (0, 1]; see above
   int min_steps = 1;         // sweeps at least (>= 1)
   int max_steps = 20;        // sweeps at most (>= min_steps)
+  // Between sweeps, each block's proposal is shrunk or widened by the share of particles that
+  // accepted in the sweep just done (the tuning table of PyMC's Metropolis step), so a block
+  // whose cloud is much wider than each particle's conditional (multimodal, or a latent tightly
+  // tied to θ) still moves. The factor depends only on population averages of earlier sweeps,
+  // so every sweep is a π_φ-invariant kernel and the result does not depend on thread count.
+  bool adapt_scale = true;
 };
 
 struct MhSummary {
@@ -41,7 +47,11 @@ struct MhSummary {
   std::vector<std::string> block_names;
   std::vector<double> acceptance;  // per block: mean acceptance rate over particles and sweeps
   std::vector<double> jump;        // per block: the final jump_b (see above)
+  std::vector<double> scale_factor;  // per block: the adapted multiplier of the proposal at the end
 };
+
+// The next proposal multiplier given the acceptance rate of the last sweep (PyMC's tune table).
+double tuned_scale_factor(double factor, double acceptance);
 
 // Σ̂ = Σ_i W_i (x_i - m)(x_i - m)ᵀ / Σ W, m = Σ W_i x_i / Σ W; X is d × P.
 Eigen::MatrixXd weighted_covariance(const Eigen::Ref<const Eigen::MatrixXd>& X,

@@ -35,11 +35,17 @@ TemperatureStep next_temperature_step(double phi, const Eigen::Ref<const Eigen::
     throw NumericalError(os.str());
   }
   const Eigen::ArrayXd shifted = loglik - top;
+  // Particles with ℓ = -inf lose their weight at any step > 0, so the relative CESS of an
+  // arbitrarily small step tends to the weight share `alive` of the others, not to 1. The target
+  // applies to the survivors; otherwise a cloud with more than 1 - target of its weight on
+  // impossible states could never take a step.
+  const double alive = (loglik > -std::numeric_limits<double>::infinity()).select(W, 0.0).sum() / W.sum();
+  const double target = options.cess_target * alive;
 
   TemperatureStep step;
   step.delta = remaining;
   step.relative_cess = relative_conditional_ess(W, shifted, remaining);
-  if (step.relative_cess >= options.cess_target) return step;
+  if (step.relative_cess >= target) return step;
 
   // Invariant: cess(lo) >= target > cess(hi).
   double lo = 0.0, hi = remaining, cess_lo = 1.0;
@@ -47,13 +53,13 @@ TemperatureStep next_temperature_step(double phi, const Eigen::Ref<const Eigen::
     const double mid = 0.5 * (lo + hi);
     if (!(mid > lo && mid < hi)) break;  // bracket at machine precision
     const double c = relative_conditional_ess(W, shifted, mid);
-    if (c >= options.cess_target) {
+    if (c >= target) {
       lo = mid;
       cess_lo = c;
     } else {
       hi = mid;
     }
-    if (std::abs(cess_lo - options.cess_target) <= options.tolerance) break;
+    if (std::abs(cess_lo - target) <= options.tolerance) break;
   }
   step.bisections = std::min(step.bisections, options.max_bisections);
   step.delta = lo;
