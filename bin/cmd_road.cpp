@@ -34,7 +34,10 @@ int run_road(int argc, const char* const argv[]) {
   if (!write_path.empty()) road::write_surface_csv_file(surface, write_path);
   const road::SurfaceSummary summary = road::summarize(surface, iri_step_m);
   if (json) std::cout << road::to_json(summary).dump(2) << "\n";
-  else std::cout << road::to_text(summary);
+  else {
+    const std::string text = road::to_text(summary);
+    std::cout << text << (text.empty() || text.back() != '\n' ? "\n" : "");
+  }
   return 0;
 }
 

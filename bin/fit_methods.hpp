@@ -17,7 +17,7 @@ namespace ssrfleet::cli {
 struct FitFlags {
   long particles = 1024;
   int threads = 0;  // 0 = all cores
-  int rejuvenate = 2;
+  int older_sweeps = 1;
   double cess_target = 0.9;
   int max_sweeps = 20;
   long iterations = 20000;  // mcmc

@@ -16,7 +16,8 @@ void FitFlags::add_to(po::options_description& desc) {
   smc.add_options()
       ("particles", po::value(&particles)->default_value(particles), "number of particles P (>= 2)")
       ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
-      ("rejuvenate", po::value(&rejuvenate)->default_value(rejuvenate), "older trucks whose latents are moved per new truck")
+      ("older-sweeps", po::value(&older_sweeps)->default_value(older_sweeps),
+       "MH sweeps over every older truck's latents after each new truck (0 = off)")
       ("cess", po::value(&cess_target)->default_value(cess_target), "conditional-ESS target of each tempering step, in (0, 1)")
       ("max-sweeps", po::value(&max_sweeps)->default_value(max_sweeps), "MCMC sweeps per tempering step at most")
       ("verbose", po::bool_switch(&verbose), "report every tempering step (phi, ESS, acceptance and jump per block)");
@@ -36,7 +37,7 @@ fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<io::WimR
   o.sampler.seed = seed;
   o.sampler.tempering.cess_target = flags.cess_target;
   o.sampler.mh.max_steps = flags.max_sweeps;
-  o.rejuvenated_trucks = flags.rejuvenate;
+  o.older_sweeps = flags.older_sweeps;
   std::string why;
   if (!o.sampler.IsValid(&why)) throw UsageError(why);
   fleet::FleetSmc smc(site, o);

@@ -9,7 +9,7 @@ FleetTarget::Options target_options(const FleetSmc::Options& o) {
   FleetTarget::Options t;
   t.particles = o.sampler.particles;
   t.prior = o.prior;
-  t.rejuvenated_trucks = o.rejuvenated_trucks;
+  t.older_sweeps = o.older_sweeps;
   return t;
 }
 

@@ -16,7 +16,7 @@ class FleetSmc {
  public:
   struct Options {
     smc::TemperedSampler::Options sampler;  // its `particles` is the particle count P
-    int rejuvenated_trucks = 2;
+    int older_sweeps = 1;  // MH sweeps over all older trucks per stage (FleetTarget)
     PriorBounds prior;
   };
 

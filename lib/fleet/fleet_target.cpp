@@ -2,9 +2,12 @@
 
 #include <cmath>
 #include <limits>
+
+#include <Eigen/Cholesky>
 #include <string>
 
 #include "fleet/truncated_samplers.hpp"
+#include "smc/mh_kernel.hpp"
 #include "smc/rng.hpp"
 #include "util/errors.hpp"
 
@@ -12,10 +15,8 @@ namespace ssrfleet::fleet {
 
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// MH blocks: the newest truck's latents, then the rejuvenated older trucks'. θ moves by Gibbs
-// (custom_moves), which mixes far better than a random walk on θ alone.
+// The one engine MH block: the newest truck's latents.
 constexpr int kNewestBlock = 0;
-constexpr int kFirstOlderBlock = 1;
 
 // Standard normal by Box-Muller on the counter-based stream (fixed forever, like uniform01).
 double standard_normal(smc::Rng& rng) {
@@ -38,7 +39,7 @@ FleetTarget::FleetTarget(const site::Site& site, Options options)
   if (options_.particles < 2) {
     throw UsageError("fleet target: particles is " + std::to_string(options_.particles) + ", but must be at least 2");
   }
-  if (options_.rejuvenated_trucks < 0) throw UsageError("fleet target: rejuvenated_trucks must be >= 0");
+  if (options_.older_sweeps < 0) throw UsageError("fleet target: older_sweeps must be >= 0");
   theta_.resize(kHyperCount, options_.particles);
   sums_ = Eigen::MatrixXd::Zero(kSumCount, options_.particles);
 }
@@ -92,11 +93,8 @@ void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& 
   ssr_.row(n) = ssr.matrix().transpose();
   for (Eigen::Index i = 0; i < P; ++i) recompute_sums(i);
 
-  // Rotate through the older trucks so each is rejuvenated every ~n / r stages.
-  rejuvenated_.clear();
-  const Eigen::Index older = n;
-  const Eigen::Index r = std::min<Eigen::Index>(options_.rejuvenated_trucks, older);
-  for (Eigen::Index q = 0; q < r; ++q) rejuvenated_.push_back((n * r + q) % older);
+  older_sweeps_done_ = 0;
+  older_scale_.resize(static_cast<std::size_t>(n), 1.0);  // the truck that was newest joins the older ones
 }
 
 Eigen::MatrixXd FleetTarget::truck_latents(Eigen::Index truck) const { return latents_.middleRows(3 * truck, 3); }
@@ -183,62 +181,33 @@ void FleetTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Ei
 }
 
 std::vector<smc::BlockSpec> FleetTarget::blocks() const {
-  std::vector<smc::BlockSpec> b = {{"truck " + std::to_string(trucks()) + " (newest)", 3}};
-  for (Eigen::Index j : rejuvenated_) b.push_back({"truck " + std::to_string(j + 1), 3});
-  return b;
+  return {{"truck " + std::to_string(trucks()) + " (newest)", 3}};
 }
 
-Eigen::Index FleetTarget::block_truck(int block) const {
-  if (block == kNewestBlock) return trucks() - 1;
-  return rejuvenated_.at(static_cast<std::size_t>(block - kFirstOlderBlock));
+void FleetTarget::get_block(int /*block*/, Eigen::Ref<Eigen::MatrixXd> values) const {
+  values = latents_.middleRows(3 * (trucks() - 1), 3);
 }
 
-void FleetTarget::get_block(int block, Eigen::Ref<Eigen::MatrixXd> values) const {
-  values = latents_.middleRows(3 * block_truck(block), 3);
-}
-
-void FleetTarget::log_density_at(int block, const Eigen::Ref<const Eigen::MatrixXd>& proposed,
+void FleetTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen::MatrixXd>& proposed,
                                  Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
                                  const smc::ParallelFor& parallel) {
   const Eigen::Index P = options_.particles;
-  const Eigen::Index newest = trucks() - 1;
-  const Eigen::Index truck = block_truck(block);
   proposed_ssr_.resize(P);
-  residuals(truck, proposed, proposed_ssr_, parallel);
+  residuals(trucks() - 1, proposed, proposed_ssr_, parallel);
   for (Eigen::Index i = 0; i < P; ++i) {
     const HyperVector t = theta_of(i);
-    if (block == kNewestBlock) {
-      log_base[i] = base_density(i, t, sums_.col(i).data(), proposed.col(i).data());
-      loglik[i] = newest_loglik(proposed_ssr_[i], t[kSigmaIf]);
-      continue;
-    }
-    // An older truck: its terms live in the running sums; swap its old values for the proposal.
-    double s[kSumCount];
-    for (int c = 0; c < kSumCount; ++c) s[c] = sums_(c, i);
-    const double k0 = latents_(3 * truck + kStiffness, i), kt0 = latents_(3 * truck + kTyreStiffness, i),
-                 z0 = latents_(3 * truck + kLateral, i);
-    const double k1 = proposed(kStiffness, i), kt1 = proposed(kTyreStiffness, i), z1 = proposed(kLateral, i);
-    s[kSumK] += k1 - k0;
-    s[kSumK2] += k1 * k1 - k0 * k0;
-    s[kSumKt] += kt1 - kt0;
-    s[kSumKt2] += kt1 * kt1 - kt0 * kt0;
-    s[kSumZ] += z1 - z0;
-    s[kSumZ2] += z1 * z1 - z0 * z0;
-    s[kSumSsr] += proposed_ssr_[i] - ssr_(truck, i);
-    const bool physical = std::isfinite(proposed_ssr_[i]);
-    log_base[i] = physical ? base_density(i, t, s, latents_.col(i).data() + 3 * newest) : -kInf;
-    loglik[i] = newest_loglik(ssr_(newest, i), t[kSigmaIf]);
+    log_base[i] = base_density(i, t, sums_.col(i).data(), proposed.col(i).data());
+    loglik[i] = newest_loglik(proposed_ssr_[i], t[kSigmaIf]);
   }
 }
 
-void FleetTarget::accept(int block, const std::vector<char>& accepted, const Eigen::Ref<const Eigen::MatrixXd>& proposed) {
-  const Eigen::Index P = options_.particles;
-  const Eigen::Index truck = block_truck(block);
-  for (Eigen::Index i = 0; i < P; ++i) {
+void FleetTarget::accept(int /*block*/, const std::vector<char>& accepted,
+                         const Eigen::Ref<const Eigen::MatrixXd>& proposed) {
+  const Eigen::Index newest = trucks() - 1;
+  for (Eigen::Index i = 0; i < options_.particles; ++i) {
     if (!accepted[static_cast<std::size_t>(i)]) continue;
-    latents_.block(3 * truck, i, 3, 1) = proposed.col(i);
-    ssr_(truck, i) = proposed_ssr_[i];
-    if (block != kNewestBlock) recompute_sums(i);
+    latents_.block(3 * newest, i, 3, 1) = proposed.col(i);
+    ssr_(newest, i) = proposed_ssr_[i];
   }
 }
 
@@ -251,12 +220,16 @@ void FleetTarget::resample(const std::vector<Eigen::Index>& ancestors) {
 
 void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
                                Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) {
+  if (phi == 1.0 && older_sweeps_done_ < options_.older_sweeps && trucks() >= 2) {
+    older_trucks_sweep(rngs.child(1), parallel);
+    ++older_sweeps_done_;
+  }
   const Eigen::Index newest = trucks() - 1;
   const double n_all = static_cast<double>(trucks());  // the newest truck's latents are in γ in full
   const auto& prior = options_.prior;
   parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index i = begin; i < end; ++i) {
-      smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+      smc::Rng rng = rngs.child(0).stream(static_cast<std::uint64_t>(i));
       HyperVector t = theta_of(i);
       const double* s = sums_.col(i).data();
       const double* x = latents_.col(i).data() + 3 * newest;
@@ -306,6 +279,104 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
       loglik[i] = newest_loglik(ssr_new, t[kSigmaIf]);
     }
   });
+}
+
+void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel) {
+  const Eigen::Index P = options_.particles, older = trucks() - 1;
+  // Per truck: a proposal from the particle cloud's spread of that truck's latents (equal
+  // weights: this runs right after a stage, whatever the weights), scaled by 2.38/√3 and by a
+  // multiplier adapted on acceptance from stage to stage.
+  std::vector<Eigen::Matrix3d> chol(static_cast<std::size_t>(older));
+  const Eigen::ArrayXd equal = Eigen::ArrayXd::Constant(P, 1.0);
+  for (Eigen::Index j = 0; j < older; ++j) {
+    const Eigen::MatrixXd x = latents_.middleRows(3 * j, 3);
+    const Eigen::VectorXd mean = x.rowwise().mean();
+    const Eigen::MatrixXd centred = x.colwise() - mean;
+    Eigen::Matrix3d cov = centred * centred.transpose() / static_cast<double>(P);
+    // A ridge keeps a collapsed coordinate movable: 1e-6 of the prior scale of each latent.
+    cov.diagonal() += Eigen::Vector3d(1e-6 * 5e4, 1e-6 * 2e5, 1e-6 * 0.5).array().square().matrix();
+    const double scale = older_scale_[static_cast<std::size_t>(j)] * 2.38 / std::sqrt(3.0);
+    chol[static_cast<std::size_t>(j)] = Eigen::LLT<Eigen::Matrix3d>(cov).matrixL();
+    chol[static_cast<std::size_t>(j)] *= scale;
+  }
+  // Proposals: particle i's draws come from its own stream, truck by truck in order.
+  Eigen::MatrixXd proposals(3 * older, P);
+  Eigen::ArrayXd log_u(older * P);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+      for (Eigen::Index j = 0; j < older; ++j) {
+        const Eigen::Vector3d z(standard_normal(rng), standard_normal(rng), standard_normal(rng));
+        proposals.block(3 * j, i, 3, 1) = latents_.block(3 * j, i, 3, 1) + chol[static_cast<std::size_t>(j)] * z;
+        log_u[i * older + j] = std::log(uniform_open01(rng));
+      }
+    }
+  });
+  // Simulate every (particle, older truck) proposal; chunks of particles run in parallel.
+  Eigen::MatrixXd new_ssr(older, P);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    std::vector<std::pair<Eigen::Index, Eigen::Index>> valid;  // (particle, truck)
+    for (Eigen::Index i = begin; i < end; ++i) {
+      for (Eigen::Index j = 0; j < older; ++j) {
+        const double k = proposals(3 * j + kStiffness, i), kt = proposals(3 * j + kTyreStiffness, i),
+                     z = proposals(3 * j + kLateral, i);
+        if (k > 0.0 && kt > 0.0 && z >= lateral_.lo_m && z <= lateral_.hi_m) valid.emplace_back(i, j);
+        else new_ssr(j, i) = kInf;
+      }
+    }
+    if (valid.empty()) return;
+    site::TruckBatch batch;
+    batch.resize(static_cast<Eigen::Index>(valid.size()));
+    for (std::size_t q = 0; q < valid.size(); ++q) {
+      const auto [i, j] = valid[q];
+      const auto b = static_cast<Eigen::Index>(q);
+      batch.speed_mps[b] = speed_mps_[static_cast<std::size_t>(j)];
+      batch.sprung_mass_kg[b] = sprung_mass_kg_[static_cast<std::size_t>(j)];
+      batch.stiffness_npm[b] = proposals(3 * j + kStiffness, i);
+      batch.tyre_stiffness_npm[b] = proposals(3 * j + kTyreStiffness, i);
+      batch.lateral_m[b] = proposals(3 * j + kLateral, i);
+    }
+    Eigen::ArrayXXd model_if(sensors_, batch.size());
+    site_.impact_factors(batch, model_if);
+    for (std::size_t q = 0; q < valid.size(); ++q) {
+      const auto [i, j] = valid[q];
+      new_ssr(j, i) = (model_if.col(static_cast<Eigen::Index>(q)) - observed_if_[static_cast<std::size_t>(j)].array()).square().sum();
+    }
+  });
+  passes_ += older * P;
+  // Accept per (particle, truck): only truck j's own terms change, given θ.
+  std::vector<char> took(static_cast<std::size_t>(older * P), 0);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const HyperVector t = theta_of(i);
+      for (Eigen::Index j = 0; j < older; ++j) {
+        if (!std::isfinite(new_ssr(j, i))) continue;
+        const auto terms = [&](const double* x, double ssr) {
+          return log_latent_density(x[kStiffness], x[kTyreStiffness], x[kLateral], t, lateral_) +
+                 log_likelihood_from_ssr(ssr, sensors_, t[kSigmaIf]);
+        };
+        const double log_ratio = terms(proposals.col(i).data() + 3 * j, new_ssr(j, i)) -
+                                 terms(latents_.col(i).data() + 3 * j, ssr_(j, i));
+        if (log_u[i * older + j] < log_ratio) {
+          latents_.block(3 * j, i, 3, 1) = proposals.block(3 * j, i, 3, 1);
+          ssr_(j, i) = new_ssr(j, i);
+          took[static_cast<std::size_t>(i * older + j)] = 1;
+        }
+      }
+      recompute_sums(i);
+    }
+  });
+  // Acceptance per truck (a serial reduction after the loop: the same whatever the threads).
+  double total = 0.0;
+  for (Eigen::Index j = 0; j < older; ++j) {
+    Eigen::Index moved = 0;
+    for (Eigen::Index i = 0; i < P; ++i) moved += took[static_cast<std::size_t>(i * older + j)];
+    const double rate = static_cast<double>(moved) / static_cast<double>(P);
+    auto& scale = older_scale_[static_cast<std::size_t>(j)];
+    scale = smc::tuned_scale_factor(scale, rate);
+    total += rate;
+  }
+  older_acceptance_ = total / static_cast<double>(older);
 }
 
 }  // namespace ssrfleet::fleet

@@ -6,9 +6,12 @@
 // so far, with each truck's sum of squared residuals cached so θ moves need no integrator call.
 // When truck n+1 arrives (add_truck), every particle is extended with latents drawn from
 // p(x | θ), so the stage's incremental weight is the new truck's likelihood alone; the engine
-// tempers it in. The random-walk MH blocks of a stage are the new truck's latents and a rotating
-// handful of older trucks' latents (rejuvenation, so their paths do not collapse onto a few
-// ancestors); θ moves by Gibbs and exact independence MH in custom_moves.
+// tempers it in. The engine's random-walk MH block is the new truck's latents; θ moves by Gibbs
+// and exact independence MH (custom_moves). Once the new truck is fully in (φ = 1), every older
+// truck's latents get `older_sweeps` random-walk MH sweeps, all trucks and particles in one
+// batched integrator call: the trucks are conditionally independent given θ, so this is one
+// Metropolis-within-Gibbs sweep per particle, and it keeps older trucks' paths from collapsing
+// onto a few ancestors (path degeneracy) at a cost of n passes per particle per truck.
 //
 // Stage base density (log γ, DESIGN.md §4):
 //   log p(θ) + Σ_{i≤n} [log p(x_i | θ) + log p(y_i | x_i, σ_IF)] + log p(x_{n+1} | θ)
@@ -32,7 +35,7 @@ class FleetTarget final : public smc::TemperedModel {
   struct Options {
     Eigen::Index particles = 1024;
     PriorBounds prior;
-    int rejuvenated_trucks = 2;  // older trucks whose latents get an MH block in each stage
+    int older_sweeps = 1;  // MH sweeps over every older truck's latents per stage; 0 = off
   };
 
   FleetTarget(const site::Site& site, Options options);
@@ -48,6 +51,7 @@ class FleetTarget final : public smc::TemperedModel {
   // Latents of truck j for every particle: 3 x P (k, k_t, z).
   Eigen::MatrixXd truck_latents(Eigen::Index truck) const;
   long long integrator_passes() const { return passes_; }
+  double older_acceptance() const { return older_acceptance_; }
 
   // smc::TemperedModel
   Eigen::Index particles() const override { return options_.particles; }
@@ -79,7 +83,8 @@ class FleetTarget final : public smc::TemperedModel {
   void residuals(Eigen::Index truck, const Eigen::Ref<const Eigen::MatrixXd>& latents,
                  Eigen::Ref<Eigen::ArrayXd> ssr_out, const smc::ParallelFor& parallel);
   HyperVector theta_of(Eigen::Index particle) const;
-  Eigen::Index block_truck(int block) const;  // truck moved by a latent block
+  // One MH sweep over every older truck's latents of every particle, at φ = 1.
+  void older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
 
   const site::Site& site_;
   Options options_;
@@ -93,8 +98,10 @@ class FleetTarget final : public smc::TemperedModel {
   Eigen::MatrixXd latents_;  // 3n x P: rows 3j..3j+2 = (k, k_t, z) of truck j
   Eigen::MatrixXd ssr_;      // n x P: sum of squared residuals of truck j
   Eigen::MatrixXd sums_;     // kSumCount x P (trucks before the newest)
-  std::vector<Eigen::Index> rejuvenated_;  // older trucks moved in this stage
-  Eigen::ArrayXd proposed_ssr_;            // SSR at the last proposals of a latent block
+  Eigen::ArrayXd proposed_ssr_;       // SSR at the last proposals of the newest truck's block
+  int older_sweeps_done_ = 0;         // in the current stage
+  std::vector<double> older_scale_;   // per older truck: adapted proposal multiplier
+  double older_acceptance_ = 0.0;     // of the last older-trucks sweep
   long long passes_ = 0;
 };
 
