@@ -50,6 +50,7 @@ class FleetTarget final : public smc::TemperedModel {
   const Eigen::MatrixXd& theta() const { return theta_; }  // 7 x P
   // Latents of truck j for every particle: 3 x P (k, k_t, z).
   Eigen::MatrixXd truck_latents(Eigen::Index truck) const;
+  const Eigen::MatrixXd& sums_of_squared_residuals() const { return ssr_; }  // trucks x P
   long long integrator_passes() const { return passes_; }
   double older_acceptance() const { return older_acceptance_; }
 

@@ -1,0 +1,138 @@
+#include <cmath>
+
+#include <catch2/catch.hpp>
+
+#include "fleet/batch_mcmc.hpp"
+#include "fleet/fleet_distribution.hpp"
+#include "fleet/fleet_smc.hpp"
+#include "fleet/posterior_summary.hpp"
+#include "fleet/simulator.hpp"
+#include "predict/ssr_prediction.hpp"
+#include "site/road_source.hpp"
+
+using namespace ssrfleet;
+
+namespace {
+const fleet::HyperVector kTruth{500e3, 50e3, 1950e3, 195e3, 1.5, 0.5, 0.02};
+
+struct Case {
+  site::Site site{site::load_road("AS1"), site::SiteOptions{}};
+  std::vector<fleet::Truck> trucks;
+  fleet::SimulatedLog log;
+  Case(int n, std::uint64_t seed) {
+    trucks = fleet::draw_fleet(fleet::FleetDistribution{}, n, site.lateral_min_m(), site.lateral_max_m(), seed);
+    log = fleet::simulate_log(site, trucks, kTruth[fleet::kSigmaIf], seed);
+  }
+};
+
+fleet::FleetSmc::Options smc_options(Eigen::Index particles, int threads, std::uint64_t seed) {
+  fleet::FleetSmc::Options o;
+  o.sampler.particles = particles;
+  o.sampler.threads = threads;
+  o.sampler.seed = seed;
+  o.sampler.mh.max_steps = 5;
+  return o;
+}
+}  // namespace
+
+TEST_CASE("the SMC target's density equals the batch MCMC's log posterior up to one constant", "[fleet][smc]") {
+  Case c(6, 11);
+  fleet::FleetSmc smc(c.site, smc_options(64, 1, 3));
+  for (const auto& r : c.log.records) smc.absorb(r);
+  // After the last stage (φ = 1), log γ + ℓ is the full log posterior of each particle's state.
+  auto& target = const_cast<fleet::FleetTarget&>(smc.target());
+  Eigen::ArrayXd log_base(64), loglik(64);
+  target.log_density(log_base, loglik, smc::ParallelFor(1));
+  const fleet::LateralRange range{c.site.lateral_min_m(), c.site.lateral_max_m()};
+  std::vector<double> offsets;
+  for (Eigen::Index i = 0; i < 64; ++i) {
+    fleet::HyperVector theta;
+    for (int h = 0; h < fleet::kHyperCount; ++h) theta[h] = target.theta()(h, i);
+    Eigen::MatrixXd latents(6, 3);
+    for (Eigen::Index j = 0; j < 6; ++j) latents.row(j) = target.truck_latents(j).col(i).transpose();
+    const Eigen::VectorXd ssr = target.sums_of_squared_residuals().col(i);
+    const double reference =
+        fleet::log_posterior_unnormalised(theta, latents, ssr, c.site.sensors(), fleet::PriorBounds{}, range);
+    offsets.push_back(log_base[i] + loglik[i] - reference);
+  }
+  for (double d : offsets) CHECK(d == Approx(offsets.front()).margin(1e-7 * std::abs(log_base[0] + loglik[0])));
+}
+
+TEST_CASE("the SMC on 20 simulated trucks brackets the true fleet hyperparameters", "[fleet][smc]") {
+  Case c(20, 5);
+  fleet::FleetSmc smc(c.site, smc_options(512, 2, 7));
+  for (const auto& r : c.log.records) smc.absorb(r);
+  const auto cloud = smc.cloud();
+  const auto summary = fleet::summarise_weighted(cloud.theta, cloud.weights);
+  for (int h : {fleet::kK, fleet::kKt, fleet::kZ, fleet::kSigmaIf}) {
+    INFO(fleet::kHyperNames[h] << ": [" << summary[h].q025 << ", " << summary[h].q975 << "] truth " << kTruth[h]);
+    CHECK(summary[h].q025 <= kTruth[h]);
+    CHECK(summary[h].q975 >= kTruth[h]);
+  }
+  CHECK(std::isfinite(cloud.log_evidence));
+  CHECK(cloud.ess > 0.3 * 512);
+  CHECK(smc.target().integrator_passes() > 0);
+}
+
+TEST_CASE("the SMC gives bit-identical posteriors for one and two threads", "[fleet][smc]") {
+  Case c(8, 21);
+  fleet::FleetSmc one(c.site, smc_options(96, 1, 5));
+  fleet::FleetSmc two(c.site, smc_options(96, 2, 5));
+  for (const auto& r : c.log.records) {
+    one.absorb(r);
+    two.absorb(r);
+  }
+  CHECK((one.cloud().theta.array() == two.cloud().theta.array()).all());
+  CHECK((one.cloud().weights == two.cloud().weights).all());
+  CHECK(one.cloud().log_evidence == two.cloud().log_evidence);
+}
+
+TEST_CASE("a record with the wrong number of sensors is refused by the fleet target", "[fleet][smc]") {
+  Case c(1, 1);
+  fleet::FleetSmc smc(c.site, smc_options(16, 1, 1));
+  auto r = c.log.records.front();
+  r.impact_factor.conservativeResize(12);
+  CHECK_THROWS_WITH(smc.absorb(r), Catch::Contains("12 impact factors") && Catch::Contains("16 sensors"));
+}
+
+// The paper's 100-truck test: the SMC posterior against the truth, against a long run of the
+// batch MCMC on the same data, and the prediction limits against the observations.
+TEST_CASE("the SMC on the paper's 100-truck fleet agrees with a long MCMC and its limits cover the data",
+          "[fleet][smc][long]") {
+  Case c(100, 1);
+  fleet::FleetSmc smc(c.site, smc_options(1024, 2, 1));
+  for (const auto& r : c.log.records) smc.absorb(r);
+  const auto cloud = smc.cloud();
+  const auto s = fleet::summarise_weighted(cloud.theta, cloud.weights);
+  for (int h : {fleet::kK, fleet::kKt, fleet::kZ, fleet::kSigmaZ, fleet::kSigmaIf}) {
+    INFO(fleet::kHyperNames[h] << ": [" << s[h].q025 << ", " << s[h].q975 << "] truth " << kTruth[h]);
+    CHECK(s[h].q025 <= kTruth[h]);
+    CHECK(s[h].q975 >= kTruth[h]);
+  }
+  fleet::BatchMcmcOptions mo;
+  mo.iterations = 60000;
+  mo.burn_in = 10000;
+  mo.thin = 5;
+  mo.seed = 2;
+  const auto mcmc = fleet::run_batch_mcmc(c.site, c.log.records, mo);
+  const auto m = fleet::summarize_draws(mcmc.theta_draws, nullptr);
+  for (int h = 0; h < fleet::kHyperCount; ++h) {
+    const double width = m[h].q975 - m[h].q025;
+    INFO(fleet::kHyperNames[h] << ": SMC mean " << s[h].mean << " [" << s[h].q025 << ", " << s[h].q975 << "], MCMC mean "
+                               << m[h].mean << " sd " << m[h].sd << " [" << m[h].q025 << ", " << m[h].q975 << "]");
+    CHECK(std::abs(s[h].mean - m[h].mean) <= 0.25 * m[h].sd);
+    CHECK(std::abs(s[h].q025 - m[h].q025) <= 0.2 * width);
+    CHECK(std::abs(s[h].q975 - m[h].q975) <= 0.2 * width);
+  }
+  const auto p = predict::predict_ssr(cloud, c.site, {}, predict::PredictionOptions{});
+  long inside = 0, total = 0;
+  for (const auto& r : c.log.records) {
+    for (Eigen::Index k = 0; k < r.impact_factor.size(); ++k, ++total) {
+      inside += r.impact_factor[k] >= p.lower95[k] && r.impact_factor[k] <= p.upper95[k];
+    }
+  }
+  const double coverage = static_cast<double>(inside) / static_cast<double>(total);
+  INFO("coverage " << coverage);
+  CHECK(coverage >= 0.92);
+  CHECK(coverage <= 0.98);
+}
