@@ -35,6 +35,8 @@
 #include <thread>
 #include <vector>
 
+#include <time.h>
+
 #include <nlohmann/json.hpp>
 
 #include "fleet/batch_mcmc.hpp"
@@ -79,6 +81,21 @@ double quantile(std::vector<double> v, double p) {
 }
 
 double median(const std::vector<double>& v) { return quantile(v, 0.5); }
+
+// CPU time of this process (all threads), to tell contention and serial time from integrator time.
+double process_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// 1-minute load average (other users of the machine show up here).
+double load_average() {
+  std::ifstream in("/proc/loadavg");
+  double one = std::numeric_limits<double>::quiet_NaN();
+  in >> one;
+  return one;
+}
 
 const char* isa_name() {
 #if defined(__AVX512F__)
@@ -232,7 +249,10 @@ int main(int argc, char** argv) {
   std::vector<double> latency_s;
   latency_s.reserve(records.size());
   int tempering_steps = 0, mh_sweeps = 0, resamplings = 0;
-  double stage_wall_s = 0.0;
+  double stage_wall_s = 0.0, newest_acceptance_sum = 0.0;
+  int capped_steps = 0;
+  const double load_before = load_average();
+  const double smc_cpu0 = process_cpu_s();
   const auto smc_t0 = Clock::now();
   fleet::FleetSmc smc(site, smc_options);
   for (const auto& record : records) {
@@ -240,11 +260,18 @@ int main(int argc, char** argv) {
     const smc::StageSummary& stage = smc.absorb(record);
     latency_s.push_back(seconds_since(t0));
     tempering_steps += static_cast<int>(stage.steps.size());
-    for (const auto& step : stage.steps) mh_sweeps += step.mh.sweeps;
+    for (const auto& step : stage.steps) {
+      mh_sweeps += step.mh.sweeps;
+      capped_steps += step.mh.sweeps >= smc_options.sampler.mh.max_steps ? 1 : 0;
+      if (!step.mh.acceptance.empty()) newest_acceptance_sum += step.mh.acceptance.front();
+    }
     resamplings += stage.resamplings();
     stage_wall_s += stage.wall_time_s;
   }
   const double smc_wall_s = seconds_since(smc_t0);
+  const double smc_cpu_s = process_cpu_s() - smc_cpu0;
+  const double load_after_smc = load_average();
+  const double newest_acceptance = tempering_steps > 0 ? newest_acceptance_sum / tempering_steps : 0.0;
   const long long smc_passes = smc.target().integrator_passes();
   const fleet::PosteriorCloud cloud = smc.cloud();
   double latency_total = 0.0;
@@ -261,6 +288,10 @@ int main(int argc, char** argv) {
   const double us_per_pass = median(calibration.us_per_pass);
   const double integrator_cpu_s = static_cast<double>(smc_passes) * us_per_pass * 1e-6;
   const double share = integrator_cpu_s / (smc_wall_s * threads_used);
+  // Diagnostics beside the headline share: how much CPU the replay actually got, and the
+  // integrator's share of that (contention and idle threads drop out of this one).
+  const double cores_used = smc_cpu_s / smc_wall_s;
+  const double share_of_process_cpu = integrator_cpu_s / smc_cpu_s;
   const double passes_per_s = static_cast<double>(smc_passes) / smc_wall_s;
   std::printf("SMC done: %.2f s; MCMC running ...\n", smc_wall_s);
   std::fflush(stdout);
@@ -271,7 +302,10 @@ int main(int argc, char** argv) {
   mcmc_options.burn_in = burn_in;
   mcmc_options.thin = 1;
   mcmc_options.seed = seed;
+  const double mcmc_cpu0 = process_cpu_s();
   const fleet::BatchMcmcResult mcmc = fleet::run_batch_mcmc(site, records, mcmc_options);
+  const double mcmc_cpu_s = process_cpu_s() - mcmc_cpu0;
+  const double load_after_mcmc = load_average();
   const Eigen::Index kept = mcmc.theta_draws.rows();
   // Constant time per sweep after the initial grid search.
   const double sweep_s = (mcmc.wall_seconds - mcmc.init_seconds) / static_cast<double>(mcmc.iterations);
@@ -306,6 +340,11 @@ int main(int argc, char** argv) {
   const std::optional<double> mcmc_time_to_target =
       kept_to_target ? std::optional<double>(time_at(*kept_to_target)) : std::nullopt;
   const EssPoint& ess_final = ess_trace.back();
+  // If not reached: a labelled extrapolation assuming ESS grows linearly with kept sweeps (never
+  // used for a target status).
+  std::optional<double> mcmc_time_extrapolated;
+  if (!mcmc_time_to_target && ess_final.min_ess > 0.0)
+    mcmc_time_extrapolated = time_at(static_cast<double>(kept) * kEssTarget / ess_final.min_ess);
 
   // ---- 5. Accuracy --------------------------------------------------------------------------------
   const auto smc_summary = fleet::summarise_weighted(cloud.theta, cloud.weights);
@@ -335,6 +374,11 @@ int main(int argc, char** argv) {
               passes_per_s / threads_used);
   std::printf("  %-38s %12d / %d / %d\n", "tempering steps / MH sweeps / resamplings", tempering_steps, mh_sweeps,
               resamplings);
+  std::printf("  %-38s %12.1f %%   (max_steps %d; newest-truck block acceptance %.2f)\n",
+              "steps whose MH sweeps hit max_steps", 100.0 * capped_steps / std::max(1, tempering_steps),
+              smc_options.sampler.mh.max_steps, newest_acceptance);
+  std::printf("  %-38s %12.2f s   (%.2f cores busy on average; load average %.2f before, %.2f after)\n",
+              "process CPU time during the replay", smc_cpu_s, cores_used, load_before, load_after_smc);
   std::printf("  %-38s %12.1f   (log evidence %.2f)\n", "final ESS", cloud.ess, cloud.log_evidence);
   std::printf("integrator calibration: Site::impact_factors, %d trucks per call, 1 thread, %d reps (%d before, %d "
               "after the replay)\n",
@@ -343,11 +387,14 @@ int main(int argc, char** argv) {
               median(calibration_before), median(calibration_after));
   std::printf("  %-38s %12.1f %%   ESTIMATE = passes x calibrated cost / (wall x %d threads)\n",
               "integrator share of CPU budget", 100.0 * share, threads_used);
+  std::printf("  %-38s %12.1f %%   (diagnostic: passes x calibrated cost / process CPU time)\n",
+              "integrator share of CPU actually used", 100.0 * share_of_process_cpu);
 
   std::printf("\nMCMC baseline (%d sweeps, burn-in %d, thin 1, 1 thread)\n", mcmc.iterations, mcmc.burn_in);
   std::printf("  %-38s %12.3f s   (grid-search init %.3f s, %.3f ms per sweep)\n", "wall", mcmc.wall_seconds,
               mcmc.init_seconds, 1e3 * sweep_s);
   std::printf("  %-38s %12lld\n", "integrator passes", mcmc.integrator_passes);
+  std::printf("  %-38s %12.2f s   (load average after %.2f)\n", "process CPU time", mcmc_cpu_s, load_after_mcmc);
   std::printf("  %-38s %12.2f / %.2f\n", "latent / (Z, sigma_z) acceptance", mcmc.latent_acceptance,
               mcmc.z_acceptance);
   std::printf("  ESS on prefixes of the kept chain (every %d sweeps):\n", kEssPrefixStep);
@@ -363,8 +410,13 @@ int main(int argc, char** argv) {
     std::printf("  %-38s %12.3f s   (%.0f kept sweeps after a %d-sweep burn-in; interpolated)\n",
                 "time to ESS >= 400 on all 7", *mcmc_time_to_target, *kept_to_target, mcmc.burn_in);
   else
+  {
     std::printf("  %-38s %12s     (min ESS %.0f after all %lld kept sweeps)\n", "time to ESS >= 400 on all 7",
                 "not reached", ess_final.min_ess, static_cast<long long>(kept));
+    if (mcmc_time_extrapolated)
+      std::printf("  %-38s %12.3f s   (EXTRAPOLATED, ESS linear in kept sweeps; not used for the target)\n",
+                  "  extrapolated time to ESS 400", *mcmc_time_extrapolated);
+  }
 
   std::printf("\nAccuracy: SMC (weighted particles) vs MCMC (kept draws); SMD = (mean_SMC - mean_MCMC) / sd_MCMC;\n"
               "dq = (q_SMC - q_MCMC) / MCMC 95%% width\n");
@@ -399,7 +451,10 @@ int main(int argc, char** argv) {
   }
   std::printf("  max |SMD| %.2f, max |dq| %.2f\n", max_abs_smd, max_abs_dq);
 
-  std::printf("\nSMC speed-up vs MCMC to ESS 400: %s%.1fx\n", mcmc_time_to_target ? "" : ">= ", speedup);
+  std::printf("\nSMC speed-up vs MCMC to ESS 400: %s%.3gx", mcmc_time_to_target ? "" : ">= ", speedup);
+  if (mcmc_time_extrapolated)
+    std::printf("   (extrapolated: %.3gx)", *mcmc_time_extrapolated / smc_wall_s);
+  std::printf("\n");
   std::printf("\nTargets%s\n", comparable_setup ? "" : " (NOTE: not the reference setup of 100 trucks, 1024 particles, 2 threads)");
   std::printf("  whole replay <= %.0f s (1024 particles, 2 cores): %8.2f s   %s\n", kTargetReplayS, smc_wall_s,
               status(replay_met).c_str());
@@ -407,7 +462,7 @@ int main(int argc, char** argv) {
               status(p50_met).c_str());
   std::printf("  integrator share >= %.0f %% (estimate):          %8.1f %%   %s\n", 100 * kTargetShare, 100 * share,
               status(share_met).c_str());
-  std::printf("  SMC >= %.0fx faster than MCMC to ESS 400:       %7.1fx     %s\n", kTargetSpeedup, speedup,
+  std::printf("  SMC >= %.0fx faster than MCMC to ESS 400:       %7.3gx     %s\n", kTargetSpeedup, speedup,
               speedup_status.c_str());
   std::fprintf(stderr, "(checksum %g)\n", calibration.sink);
 
@@ -438,6 +493,12 @@ int main(int argc, char** argv) {
                   {"quantile_definition", "linear interpolation (type 7) over the per-truck latencies"}}},
                 {"per_truck_latency_s", latency_s},
                 {"stage_wall_time_total_s", stage_wall_s},
+                {"process_cpu_s", smc_cpu_s},
+                {"cores_busy_average", cores_used},
+                {"load_average_1min", {{"before", load_before}, {"after", load_after_smc}}},
+                {"steps_hitting_max_mh_sweeps", capped_steps},
+                {"max_mh_sweeps_per_step", smc_options.sampler.mh.max_steps},
+                {"newest_block_acceptance_mean", newest_acceptance},
                 {"integrator_passes", smc_passes},
                 {"passes_per_s", passes_per_s},
                 {"tempering_steps", tempering_steps},
@@ -450,11 +511,19 @@ int main(int argc, char** argv) {
                                    {"us_per_pass_median", us_per_pass},
                                    {"us_per_pass_before_replay", calibration_before},
                                    {"us_per_pass_after_replay", calibration_after}};
-    j["integrator_share"] = {{"value", share}, {"integrator_cpu_s", integrator_cpu_s}, {"method", share_method}};
+    j["integrator_share"] = {{"value", share},
+                             {"integrator_cpu_s", integrator_cpu_s},
+                             {"method", share_method},
+                             {"share_of_process_cpu", share_of_process_cpu},
+                             {"share_of_process_cpu_method",
+                              "diagnostic: the same integrator CPU estimate over the process CPU time "
+                              "(CLOCK_PROCESS_CPUTIME_ID) of the replay"}};
     nlohmann::json trace = nlohmann::json::array();
     for (const auto& p : ess_trace) trace.push_back({{"kept", p.kept}, {"time_s", p.time_s}, {"ess", p.ess}, {"min_ess", p.min_ess}});
     j["mcmc"] = {{"wall_s", mcmc.wall_seconds},
                  {"init_s", mcmc.init_seconds},
+                 {"process_cpu_s", mcmc_cpu_s},
+                 {"load_average_1min_after", load_after_mcmc},
                  {"seconds_per_sweep", sweep_s},
                  {"iterations", mcmc.iterations},
                  {"burn_in", mcmc.burn_in},
@@ -466,13 +535,21 @@ int main(int argc, char** argv) {
                  {"time_to_ess_target_s", mcmc_time_to_target ? nlohmann::json(*mcmc_time_to_target) : nlohmann::json()},
                  {"kept_sweeps_to_ess_target", kept_to_target ? nlohmann::json(*kept_to_target) : nlohmann::json()},
                  {"reached", mcmc_time_to_target.has_value()},
+                 {"time_to_ess_target_extrapolated_s",
+                  mcmc_time_extrapolated ? nlohmann::json(*mcmc_time_extrapolated) : nlohmann::json()},
+                 {"extrapolation_method",
+                  "only when not reached: kept sweeps x 400 / final min ESS (ESS linear in sweeps), same time model; "
+                  "never used for a target status"},
                  {"time_method", mcmc_time_method},
                  {"ess_final", ess_final.ess},
                  {"ess_trace", trace}};
     j["accuracy"] = accuracy;
     j["accuracy_max_abs_smd"] = max_abs_smd;
     j["accuracy_max_abs_quantile_difference"] = max_abs_dq;
-    j["speedup_smc_vs_mcmc_to_ess400"] = {{"value", speedup}, {"lower_bound", !mcmc_time_to_target.has_value()}};
+    j["speedup_smc_vs_mcmc_to_ess400"] = {
+        {"value", speedup},
+        {"lower_bound", !mcmc_time_to_target.has_value()},
+        {"extrapolated", mcmc_time_extrapolated ? nlohmann::json(*mcmc_time_extrapolated / smc_wall_s) : nlohmann::json()}};
     j["targets"] = nlohmann::json::array(
         {{{"name", "whole replay <= 20 s (1024 particles, 2 cores)"}, {"value", smc_wall_s}, {"met", replay_met}},
          {{"name", "p50 per-truck latency <= 0.2 s"}, {"value", p50}, {"met", p50_met}},
@@ -504,19 +581,33 @@ int main(int argc, char** argv) {
        << "| SMC passes per second (wall) | " << fmt("%.0f", passes_per_s) << " |\n"
        << "| SMC tempering steps / MH sweeps / resamplings | " << tempering_steps << " / " << mh_sweeps << " / "
        << resamplings << " |\n"
+       << "| SMC tempering steps whose MH sweeps hit max_steps (" << smc_options.sampler.mh.max_steps << ") | "
+       << fmt("%.1f", 100.0 * capped_steps / std::max(1, tempering_steps)) << " % |\n"
+       << "| SMC newest-truck MH acceptance (mean over steps) | " << fmt("%.2f", newest_acceptance) << " |\n"
        << "| SMC final ESS | " << fmt("%.0f", cloud.ess) << " |\n"
+       << "| SMC process CPU time / cores busy on average | " << fmt("%.2f", smc_cpu_s) << " s / "
+       << fmt("%.2f", cores_used) << " |\n"
+       << "| Load average (1 min) before / after the replay | " << fmt("%.2f", load_before) << " / "
+       << fmt("%.2f", load_after_smc) << " |\n"
        << "| Integrator cost per pass (calibrated, " << kCalibrationBatch << "-truck batches, 1 thread) | "
        << fmt("%.3f", us_per_pass) << " us |\n"
        << "| Integrator share (estimate*) | " << fmt("%.1f", 100 * share) << " % |\n"
+       << "| Integrator share of the CPU time the replay actually used (diagnostic) | "
+       << fmt("%.1f", 100 * share_of_process_cpu) << " % |\n"
        << "| MCMC wall (all sweeps) | " << fmt("%.2f", mcmc.wall_seconds) << " s |\n"
        << "| MCMC integrator passes | " << mcmc.integrator_passes << " |\n"
        << "| MCMC time to ESS >= 400 on all 7 | "
        << (mcmc_time_to_target ? fmt("%.2f", *mcmc_time_to_target) + " s (" + fmt("%.0f", *kept_to_target) +
                                      " kept sweeps after burn-in)"
-                               : "not reached (min ESS " + fmt("%.0f", ess_final.min_ess) + ")")
+                               : "not reached (min ESS " + fmt("%.0f", ess_final.min_ess) + ")" +
+                                     (mcmc_time_extrapolated ? "; extrapolated " + fmt("%.2f", *mcmc_time_extrapolated) +
+                                                                   " s (ESS linear in sweeps)"
+                                                             : std::string()))
        << " |\n"
-       << "| SMC speed-up vs MCMC to ESS 400 | " << (mcmc_time_to_target ? "" : ">= ") << fmt("%.1f", speedup)
-       << "x |\n\n"
+       << "| SMC speed-up vs MCMC to ESS 400 | " << (mcmc_time_to_target ? "" : ">= ") << fmt("%.3g", speedup) << "x"
+       << (mcmc_time_extrapolated ? " (extrapolated " + fmt("%.3g", *mcmc_time_extrapolated / smc_wall_s) + "x)"
+                                  : std::string())
+       << " |\n\n"
        << "\\* " << share_method << ".\n\nMCMC time to ESS: " << mcmc_time_method << ".\n\n"
        << "## Targets" << (comparable_setup ? "" : " (not the reference setup)") << "\n\n"
        << "| target | value | status |\n|---|---|---|\n"
@@ -525,7 +616,7 @@ int main(int argc, char** argv) {
        << "| p50 per-truck latency <= 0.2 s | " << fmt("%.3f", p50) << " s | " << status(p50_met) << " |\n"
        << "| integrator share >= 70 % (estimate) | " << fmt("%.1f", 100 * share) << " % | " << status(share_met)
        << " |\n"
-       << "| SMC >= 10x faster than MCMC to ESS 400 | " << fmt("%.1f", speedup) << "x | " << speedup_status
+       << "| SMC >= 10x faster than MCMC to ESS 400 | " << fmt("%.3g", speedup) << "x | " << speedup_status
        << " |\n\n"
        << "## Accuracy\n\nSMD = (mean_SMC - mean_MCMC) / sd_MCMC; dq = (q_SMC - q_MCMC) / (MCMC 95 % width).\n\n"
        << "| parameter | truth | SMC mean | SMC sd | SMC 95 % | MCMC mean | MCMC sd | MCMC 95 % | MCMC ESS | SMD | "

@@ -17,9 +17,9 @@ namespace ssrfleet::cli {
 struct FitFlags {
   long particles = 1024;
   int threads = 0;  // 0 = all cores
-  int older_sweeps = 1;
+  int older_sweeps = 2;
   double cess_target = 0.9;
-  int max_sweeps = 20;
+  int max_sweeps = 5;
   long iterations = 20000;  // mcmc
   long burn_in = 5000;      // mcmc
   long thin = 10;           // mcmc

@@ -15,8 +15,18 @@ namespace ssrfleet::fleet {
 class FleetSmc {
  public:
   struct Options {
-    smc::TemperedSampler::Options sampler;  // its `particles` is the particle count P
-    int older_sweeps = 1;  // MH sweeps over all older trucks per stage (FleetTarget)
+    // Its `particles` is the particle count P. The sweeps per tempering step are capped at 5:
+    // the new truck's lateral position is multimodal, so the cloud-scaled jump target is seldom
+    // reached by local moves and the cap decides the cost; the particle population, not the
+    // chain, carries the modes.
+    smc::TemperedSampler::Options sampler = [] {
+      smc::TemperedSampler::Options o;
+      o.mh.max_steps = 5;
+      return o;
+    }();
+    // MH sweeps over all older trucks per stage (FleetTarget). Two keep σ_k and σ_kt within a
+    // quarter posterior sd of a long MCMC on the paper's case; one left them 0.4 sd low.
+    int older_sweeps = 2;
     PriorBounds prior;
   };
 

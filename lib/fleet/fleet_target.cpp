@@ -136,38 +136,43 @@ double FleetTarget::newest_loglik(double ssr, double sigma_if) const {
   return log_likelihood_from_ssr(ssr, sensors_, sigma_if);
 }
 
+void FleetTarget::simulate_ssr(const std::vector<SsrJob>& jobs) const {
+  // Only physical states are simulated; the rest get an infinite SSR (likelihood zero).
+  std::vector<const SsrJob*> physical;
+  physical.reserve(jobs.size());
+  for (const auto& job : jobs) {
+    const double k = job.latents[kStiffness], kt = job.latents[kTyreStiffness], z = job.latents[kLateral];
+    if (k > 0.0 && kt > 0.0 && z >= lateral_.lo_m && z <= lateral_.hi_m) physical.push_back(&job);
+    else *job.ssr_out = kInf;
+  }
+  if (physical.empty()) return;
+  site::TruckBatch batch;
+  batch.resize(static_cast<Eigen::Index>(physical.size()));
+  for (std::size_t q = 0; q < physical.size(); ++q) {
+    const auto b = static_cast<Eigen::Index>(q);
+    const auto truck = static_cast<std::size_t>(physical[q]->truck);
+    batch.speed_mps[b] = speed_mps_[truck];
+    batch.sprung_mass_kg[b] = sprung_mass_kg_[truck];
+    batch.stiffness_npm[b] = physical[q]->latents[kStiffness];
+    batch.tyre_stiffness_npm[b] = physical[q]->latents[kTyreStiffness];
+    batch.lateral_m[b] = physical[q]->latents[kLateral];
+  }
+  Eigen::ArrayXXd model_if(sensors_, batch.size());
+  site_.impact_factors(batch, model_if);
+  for (std::size_t q = 0; q < physical.size(); ++q) {
+    const auto& y = observed_if_[static_cast<std::size_t>(physical[q]->truck)];
+    *physical[q]->ssr_out = (model_if.col(static_cast<Eigen::Index>(q)) - y.array()).square().sum();
+  }
+}
+
 void FleetTarget::residuals(Eigen::Index truck, const Eigen::Ref<const Eigen::MatrixXd>& latents,
                             Eigen::Ref<Eigen::ArrayXd> ssr_out, const smc::ParallelFor& parallel) {
-  const Eigen::Index P = latents.cols();
-  const auto& y = observed_if_[static_cast<std::size_t>(truck)];
-  const double v = speed_mps_[static_cast<std::size_t>(truck)], m2 = sprung_mass_kg_[static_cast<std::size_t>(truck)];
-  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
-    // Only physical states are simulated; the rest get an infinite SSR (likelihood zero).
-    std::vector<Eigen::Index> valid;
-    valid.reserve(static_cast<std::size_t>(end - begin));
-    for (Eigen::Index i = begin; i < end; ++i) {
-      const double k = latents(kStiffness, i), kt = latents(kTyreStiffness, i), z = latents(kLateral, i);
-      if (k > 0.0 && kt > 0.0 && z >= lateral_.lo_m && z <= lateral_.hi_m) valid.push_back(i);
-      else ssr_out[i] = kInf;
-    }
-    if (valid.empty()) return;
-    site::TruckBatch batch;
-    batch.resize(static_cast<Eigen::Index>(valid.size()));
-    for (std::size_t q = 0; q < valid.size(); ++q) {
-      const auto b = static_cast<Eigen::Index>(q);
-      batch.speed_mps[b] = v;
-      batch.sprung_mass_kg[b] = m2;
-      batch.stiffness_npm[b] = latents(kStiffness, valid[q]);
-      batch.tyre_stiffness_npm[b] = latents(kTyreStiffness, valid[q]);
-      batch.lateral_m[b] = latents(kLateral, valid[q]);
-    }
-    Eigen::ArrayXXd model_if(sensors_, batch.size());
-    site_.impact_factors(batch, model_if);
-    for (std::size_t q = 0; q < valid.size(); ++q) {
-      ssr_out[valid[q]] = (model_if.col(static_cast<Eigen::Index>(q)) - y.array()).square().sum();
-    }
+  parallel(latents.cols(), [&](Eigen::Index begin, Eigen::Index end) {
+    std::vector<SsrJob> jobs;
+    for (Eigen::Index i = begin; i < end; ++i) jobs.push_back({truck, latents.col(i).data(), &ssr_out[i]});
+    simulate_ssr(jobs);
   });
-  passes_ += P;
+  passes_ += latents.cols();
 }
 
 void FleetTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
@@ -315,33 +320,11 @@ void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::Par
   // Simulate every (particle, older truck) proposal; chunks of particles run in parallel.
   Eigen::MatrixXd new_ssr(older, P);
   parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
-    std::vector<std::pair<Eigen::Index, Eigen::Index>> valid;  // (particle, truck)
+    std::vector<SsrJob> jobs;
     for (Eigen::Index i = begin; i < end; ++i) {
-      for (Eigen::Index j = 0; j < older; ++j) {
-        const double k = proposals(3 * j + kStiffness, i), kt = proposals(3 * j + kTyreStiffness, i),
-                     z = proposals(3 * j + kLateral, i);
-        if (k > 0.0 && kt > 0.0 && z >= lateral_.lo_m && z <= lateral_.hi_m) valid.emplace_back(i, j);
-        else new_ssr(j, i) = kInf;
-      }
+      for (Eigen::Index j = 0; j < older; ++j) jobs.push_back({j, proposals.col(i).data() + 3 * j, &new_ssr(j, i)});
     }
-    if (valid.empty()) return;
-    site::TruckBatch batch;
-    batch.resize(static_cast<Eigen::Index>(valid.size()));
-    for (std::size_t q = 0; q < valid.size(); ++q) {
-      const auto [i, j] = valid[q];
-      const auto b = static_cast<Eigen::Index>(q);
-      batch.speed_mps[b] = speed_mps_[static_cast<std::size_t>(j)];
-      batch.sprung_mass_kg[b] = sprung_mass_kg_[static_cast<std::size_t>(j)];
-      batch.stiffness_npm[b] = proposals(3 * j + kStiffness, i);
-      batch.tyre_stiffness_npm[b] = proposals(3 * j + kTyreStiffness, i);
-      batch.lateral_m[b] = proposals(3 * j + kLateral, i);
-    }
-    Eigen::ArrayXXd model_if(sensors_, batch.size());
-    site_.impact_factors(batch, model_if);
-    for (std::size_t q = 0; q < valid.size(); ++q) {
-      const auto [i, j] = valid[q];
-      new_ssr(j, i) = (model_if.col(static_cast<Eigen::Index>(q)) - observed_if_[static_cast<std::size_t>(j)].array()).square().sum();
-    }
+    simulate_ssr(jobs);
   });
   passes_ += older * P;
   // Accept per (particle, truck): only truck j's own terms change, given θ.

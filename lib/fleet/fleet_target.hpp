@@ -35,7 +35,7 @@ class FleetTarget final : public smc::TemperedModel {
   struct Options {
     Eigen::Index particles = 1024;
     PriorBounds prior;
-    int older_sweeps = 1;  // MH sweeps over every older truck's latents per stage; 0 = off
+    int older_sweeps = 2;  // MH sweeps over every older truck's latents per stage; 0 = off
   };
 
   FleetTarget(const site::Site& site, Options options);
@@ -80,6 +80,15 @@ class FleetTarget final : public smc::TemperedModel {
                       const double* newest_latents) const;
   double newest_loglik(double ssr, double sigma_if) const;
   void recompute_sums(Eigen::Index particle);
+  // One simulation: a truck at some latents (k, k_t, z); its SSR goes to *ssr_out.
+  struct SsrJob {
+    Eigen::Index truck;
+    const double* latents;
+    double* ssr_out;
+  };
+  // Runs the jobs through one batched integrator call (serial: callers split the work).
+  // Non-physical latents (k or k_t <= 0, z off the road) get an infinite SSR, unsimulated.
+  void simulate_ssr(const std::vector<SsrJob>& jobs) const;
   // SSR of truck `truck` at the latents in columns of `latents` (3 x P) for every particle.
   void residuals(Eigen::Index truck, const Eigen::Ref<const Eigen::MatrixXd>& latents,
                  Eigen::Ref<Eigen::ArrayXd> ssr_out, const smc::ParallelFor& parallel);
