@@ -93,8 +93,9 @@ class FleetTarget final : public smc::TemperedModel {
   void residuals(Eigen::Index truck, const Eigen::Ref<const Eigen::MatrixXd>& latents,
                  Eigen::Ref<Eigen::ArrayXd> ssr_out, const smc::ParallelFor& parallel);
   HyperVector theta_of(Eigen::Index particle) const;
-  // One MH sweep over every older truck's latents of every particle, at φ = 1.
-  void older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
+  // One MH sweep over every older truck's latents of every particle, at φ = 1: a random walk on
+  // (k, k_t, z), or (stiffness_from_prior) an independence proposal of (k, k_t) from p(· | θ).
+  void older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel, bool stiffness_from_prior);
 
   const site::Site& site_;
   Options options_;
