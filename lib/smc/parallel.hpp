@@ -6,6 +6,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 
 #include <Eigen/Core>
 
@@ -25,6 +26,9 @@ class ParallelFor {
 
  private:
   int threads_;
+  // threads_ - 1 workers started once and reused by every call: a loop per MCMC sweep would
+  // otherwise start and join threads thousands of times per truck. Copies share the pool.
+  std::shared_ptr<class WorkerPool> pool_;
 };
 
 }  // namespace ssrfleet::smc
