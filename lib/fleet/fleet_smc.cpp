@@ -19,12 +19,13 @@ constexpr std::uint64_t kNewTruckDraws = 1;
 }  // namespace
 
 FleetSmc::FleetSmc(const site::Site& site, Options options)
-    : site_(site), target_(site, target_options(options)), sampler_(options.sampler) {
+    : site_(site), target_(site, target_options(options)), sampler_(options.sampler),
+      parallel_(options.sampler.threads) {
   target_.initialise(sampler_.model_rngs().child(kInitialDraws));
 }
 
 const smc::StageSummary& FleetSmc::absorb(const io::WimRecord& record) {
-  target_.add_truck(record, sampler_.model_rngs().child(kNewTruckDraws));
+  target_.add_truck(record, sampler_.model_rngs().child(kNewTruckDraws), parallel_);
   speed_mps_.push_back(record.speed_mps);
   sprung_mass_kg_.push_back(record.sprung_mass_kg);
   sampler_.run_stage(target_, "truck '" + record.truck_id + "' (#" + std::to_string(target_.trucks()) + ")");

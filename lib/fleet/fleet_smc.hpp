@@ -46,6 +46,7 @@ class FleetSmc {
   const site::Site& site_;
   FleetTarget target_;
   smc::TemperedSampler sampler_;
+  smc::ParallelFor parallel_;  // for the model's own work between stages (same threads as the engine)
   std::vector<double> speed_mps_, sprung_mass_kg_;
 };
 

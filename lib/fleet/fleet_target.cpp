@@ -65,13 +65,13 @@ void FleetTarget::initialise(const smc::RngFactory& rngs) {
   observed_if_.clear();
 }
 
-void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& rngs) {
+void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& rngs,
+                            const smc::ParallelFor& parallel) {
   if (record.impact_factor.size() != sensors_) {
     throw DataError("truck '" + record.truck_id + "' has " + std::to_string(record.impact_factor.size()) +
                     " impact factors but the site has " + std::to_string(sensors_) + " sensors");
   }
   const Eigen::Index n = trucks();
-  // The previous newest truck becomes an older one: fold it into the running sums.
   speed_mps_.push_back(record.speed_mps);
   sprung_mass_kg_.push_back(record.sprung_mass_kg);
   observed_if_.push_back(record.impact_factor);
@@ -90,8 +90,9 @@ void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& 
     latents_(3 * n + kLateral, i) = z;
   }
   Eigen::ArrayXd ssr(P);
-  residuals(n, latents_.middleRows(3 * n, 3), ssr, smc::ParallelFor(1));
+  residuals(n, latents_.middleRows(3 * n, 3), ssr, parallel);
   ssr_.row(n) = ssr.matrix().transpose();
+  // The previous newest truck is an older one now: fold it into the running sums.
   for (Eigen::Index i = 0; i < P; ++i) recompute_sums(i);
 
   older_sweeps_done_ = 0;
@@ -116,7 +117,7 @@ void FleetTarget::recompute_sums(Eigen::Index i) {
   for (int c = 0; c < kSumCount; ++c) sums_(c, i) = s[c];
 }
 
-double FleetTarget::base_density(Eigen::Index /*particle*/, const HyperVector& t, const double* s,
+double FleetTarget::base_density(const HyperVector& t, const double* s,
                                  const double* newest) const {
   double lp = options_.prior.log_prior(t);
   if (lp == -kInf) return lp;
@@ -181,7 +182,7 @@ void FleetTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Ei
   const Eigen::Index newest = trucks() - 1;
   for (Eigen::Index i = 0; i < options_.particles; ++i) {
     const HyperVector t = theta_of(i);
-    log_base[i] = base_density(i, t, sums_.col(i).data(), latents_.col(i).data() + 3 * newest);
+    log_base[i] = base_density(t, sums_.col(i).data(), latents_.col(i).data() + 3 * newest);
     loglik[i] = newest_loglik(ssr_(newest, i), t[kSigmaIf]);
   }
 }
@@ -202,7 +203,7 @@ void FleetTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen::Ma
   residuals(trucks() - 1, proposed, proposed_ssr_, parallel);
   for (Eigen::Index i = 0; i < P; ++i) {
     const HyperVector t = theta_of(i);
-    log_base[i] = base_density(i, t, sums_.col(i).data(), proposed.col(i).data());
+    log_base[i] = base_density(t, sums_.col(i).data(), proposed.col(i).data());
     loglik[i] = newest_loglik(proposed_ssr_[i], t[kSigmaIf]);
   }
 }
@@ -285,7 +286,7 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
         }
       }
       for (int j = 0; j < kHyperCount; ++j) theta_(j, i) = t[j];
-      log_base[i] = base_density(i, t, s, x);
+      log_base[i] = base_density(t, s, x);
       loglik[i] = newest_loglik(ssr_new, t[kSigmaIf]);
     }
   });

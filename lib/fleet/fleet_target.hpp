@@ -44,7 +44,7 @@ class FleetTarget final : public smc::TemperedModel {
   void initialise(const smc::RngFactory& rngs);
   // Extends every particle with the truck's latents drawn from p(x | θ) and makes its
   // likelihood the increment of the next stage. The record's sensor count must match the site.
-  void add_truck(const io::WimRecord& record, const smc::RngFactory& rngs);
+  void add_truck(const io::WimRecord& record, const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
 
   Eigen::Index trucks() const { return static_cast<Eigen::Index>(speed_mps_.size()); }
   const Eigen::MatrixXd& theta() const { return theta_; }  // 7 x P
@@ -76,7 +76,7 @@ class FleetTarget final : public smc::TemperedModel {
   // Running sums over the trucks before the newest (index < trucks()-1), per particle.
   enum Sum : int { kSumK = 0, kSumK2, kSumKt, kSumKt2, kSumZ, kSumZ2, kSumSsr, kSumCount };
 
-  double base_density(Eigen::Index particle, const HyperVector& theta, const double* sums,
+  double base_density(const HyperVector& theta, const double* sums,
                       const double* newest_latents) const;
   double newest_loglik(double ssr, double sigma_if) const;
   void recompute_sums(Eigen::Index particle);
