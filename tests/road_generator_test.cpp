@@ -138,7 +138,11 @@ TEST_CASE("generating a preset takes well under a second", "[road][generator]") 
   const Surface s = preset_surface("AS3");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   CHECK(s.samples() == 2001);
+#if defined(NDEBUG) && !defined(__SANITIZE_ADDRESS__)
   CHECK(seconds < 1.0);
+#else
+  WARN("timing not checked in a debug or sanitizer build (took " << seconds << " s)");
+#endif
 }
 
 TEST_CASE("surface specs are validated", "[road][generator]") {
