@@ -317,6 +317,17 @@ Result run(const Options& o) {
     obs.segment(fitted, M - fitted).maxCoeff(&ok);
     res.fig8_predicted_peak = static_cast<int>(pk) + fitted + 1;
     res.fig8_observed_peak = static_cast<int>(ok) + fitted + 1;
+    const auto top2 = [&](const Eigen::ArrayXd& v) {
+      std::vector<int> idx;
+      for (int m = fitted; m < M; ++m) idx.push_back(m);
+      std::sort(idx.begin(), idx.end(), [&](int a, int b) { return v[a] > v[b]; });
+      std::array<int, 2> t{idx[0] + 1, idx.size() > 1 ? idx[1] + 1 : idx[0] + 1};
+      std::sort(t.begin(), t.end());
+      return t;
+    };
+    res.fig8_predicted_top2 = top2(pred8.mean_if);
+    res.fig8_observed_top2 = top2(obs);
+    for (int m = fitted; m < M; ++m) res.fig8_max_mean_diff = std::max(res.fig8_max_mean_diff, std::abs(pred8.mean_if[m] - obs[m]));
     write("fig8_prediction.csv", [&](std::ostream& os) {
       os << "sensor,position_m,used_in_fit,mean_if,lower95,upper95,mean_lower95,mean_upper95,observed_mean,observed_inside\n";
       for (int m = 0; m < M; ++m) {
@@ -407,7 +418,7 @@ Result run(const Options& o) {
          << fmt(h[j].q025) << ", " << fmt(h[j].q975) << "] (" << fmt(res.truth[j]) << ", "
          << (in ? "inside" : "outside") << ") | "
          << (j == fleet::kK ? "good agreement between inferred and true distributions of k"
-                            : "similar results for k_t and z (no numbers given)")
+                            : "similar results for k_t and z (no hyperparameter values given)")
          << " |\n";
     }
     os << "| Fig. 6 | truths inside their 95 % interval | " << res.hyper_covered << " of " << int(fleet::kHyperCount)
@@ -420,6 +431,12 @@ Result run(const Options& o) {
        << " / sensor " << res.fig8_observed_peak << " ("
        << (res.fig8_predicted_peak == res.fig8_observed_peak ? "correct" : "wrong")
        << ") | sensors 12 and 13 (92.5 m, 94 m) predicted correctly as high-mean locations |\n";
+    os << "| Fig. 8 | two highest-mean sensors among 11-16: predicted / observed | " << res.fig8_predicted_top2[0] << " and "
+       << res.fig8_predicted_top2[1] << " / " << res.fig8_observed_top2[0] << " and " << res.fig8_observed_top2[1] << " ("
+       << (res.fig8_predicted_top2 == res.fig8_observed_top2 ? "same" : "different")
+       << ") | sensors 12 and 13 will be locations of high mean impact factor |\n";
+    os << "| Fig. 8 | largest abs. difference of mean IF at 11-16, predicted vs observed | " << fixed(res.fig8_max_mean_diff, 4)
+       << " | the fitted model predicts the pattern of SSR |\n";
     for (const auto& c : res.fig9) {
       os << "| Fig. 9 | " << c.road << ": largest abs. difference of mean IF, predicted vs new fleet | "
          << fixed(c.max_abs_mean_diff, 4) << " (sensor " << c.max_mean_sensor << ") | "

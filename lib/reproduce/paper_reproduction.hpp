@@ -47,6 +47,8 @@ struct Result {
   double fig8_coverage = 0.0;          // the same at sensors 11-16, from the fit on sensors 1-10
   int fig8_predicted_peak = 0;         // sensor (1-based) of the highest predicted mean among 11-16
   int fig8_observed_peak = 0;          // ... and of the highest observed mean
+  std::array<int, 2> fig8_predicted_top2{}, fig8_observed_top2{};  // the two highest means among 11-16, sorted
+  double fig8_max_mean_diff = 0.0;  // largest |predicted - observed mean| at 11-16
   std::vector<SiteComparison> fig9;    // AS2, AS3
   std::array<double, 3> k_interval_width{};  // 95 % width of K after 10 %, 50 %, 100 % of the trucks
   double fit_wall_s = 0.0, total_wall_s = 0.0;
