@@ -24,6 +24,7 @@ const std::map<std::string, Command>& commands() {
       {"road", {ssrfleet::cli::run_road, "write a preset road surface or summarise a road file"}},
       {"fit", {ssrfleet::cli::run_fit, "fit the fleet posterior to a WIM log (SMC, or the batch MCMC)"}},
       {"predict", {ssrfleet::cli::run_predict, "predict the SSR pattern from a posterior, on this road or another"}},
+      {"reproduce", {ssrfleet::cli::run_reproduce, "the paper's theoretical test end to end: figure data, plots, summary.md"}},
   };
   return table;
 }

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# The README's main-job command: installs dependencies, builds, runs the main job.
+# The README's main-job command: installs dependencies, builds, and reproduces the paper's
+# theoretical test end to end (figure data, PNG/SVG plots, summary.md) into out/reproduce.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup-debian.sh
 bash scripts/build.sh
 mkdir -p out
-./build/ssrfleet simulate --road AS1 --trucks 100 --seed 1 --out out/wim_as1.csv
-echo "wrote out/wim_as1.csv" >&2
+./build/ssrfleet reproduce --out out/reproduce
+echo "wrote out/reproduce (summary.md, figure CSVs, plots)" >&2

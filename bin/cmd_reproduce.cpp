@@ -1,0 +1,43 @@
+// ssrfleet reproduce: the paper's theoretical test end to end (lib/reproduce): the data behind
+// Figs. 4 and 6-9, the posterior's evolution, plots, and summary.md beside the paper's numbers.
+#include <iostream>
+#include <string>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "reproduce/paper_reproduction.hpp"
+
+namespace ssrfleet::cli {
+
+int run_reproduce(int argc, const char* const argv[]) {
+  reproduce::Options o;
+  o.out_dir = "reproduce";
+  std::string seed_text = "1";
+  bool quiet = false, no_plots = false;
+  po::options_description desc("reproduce options");
+  desc.add_options()
+      ("help,h", "show this help")
+      ("out,o", po::value(&o.out_dir)->default_value(o.out_dir), "folder for the CSVs, plots and summary.md")
+      ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (fleet, noise, SMC, prediction)")
+      ("trucks", po::value(&o.trucks)->default_value(o.trucks), "trucks in the fleet (the paper: 100)")
+      ("particles", po::value(&o.particles)->default_value(o.particles), "SMC particles")
+      ("threads", po::value(&o.threads)->default_value(o.threads), "worker threads; 0 = all cores")
+      ("noise", po::value(&o.noise_sd)->default_value(o.noise_sd), "measurement noise sd sigma_IF")
+      ("draws", po::value(&o.theta_draws)->default_value(o.theta_draws), "prediction: posterior draws of theta")
+      ("trucks-per-draw", po::value(&o.trucks_per_draw)->default_value(o.trucks_per_draw),
+       "prediction: simulated trucks per theta draw")
+      ("no-plots", po::bool_switch(&no_plots), "write the gnuplot scripts but do not run gnuplot")
+      ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
+  po::variables_map vm;
+  if (!parse_or_help(argc, argv, desc, nullptr, vm,
+                     "usage: ssrfleet reproduce [--out DIR] [--seed K] [--trucks 100] [--particles 1024] [--noise 0.02]")) {
+    return 0;
+  }
+  o.seed = parse_seed(seed_text);
+  o.plots = !no_plots;
+  o.progress = quiet ? nullptr : &std::cerr;
+  reproduce::run(o);
+  return 0;
+}
+
+}  // namespace ssrfleet::cli
