@@ -86,8 +86,12 @@ StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view l
   Eigen::ArrayXd log_base(P), loglik(P);
   model.log_density(log_base, loglik, parallel_);
   check_loglik(loglik, label);
+  // A particle may sit outside the new stage's support only if it is already dead (zero weight
+  // carried over from an earlier stage that was not followed by resampling); it stays dead.
+  constexpr double kInf = std::numeric_limits<double>::infinity();
   for (Eigen::Index i = 0; i < P; ++i) {
-    if (!(log_base[i] > -std::numeric_limits<double>::infinity() && log_base[i] < std::numeric_limits<double>::infinity())) {
+    const bool dead = log_weights_[i] == -kInf;
+    if (std::isnan(log_base[i]) || log_base[i] == kInf || (log_base[i] == -kInf && !dead)) {
       std::ostringstream os;
       os << "stage '" << label << "': log base density of particle " << i << " is " << log_base[i]
          << " (a particle outside the support, or a NaN)";
