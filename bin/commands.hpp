@@ -8,6 +8,7 @@ int run_simulate(int argc, const char* const argv[]);
 int run_road(int argc, const char* const argv[]);
 int run_fit(int argc, const char* const argv[]);
 int run_predict(int argc, const char* const argv[]);
+int run_stream(int argc, const char* const argv[]);
 int run_reproduce(int argc, const char* const argv[]);
 
 }  // namespace ssrfleet::cli

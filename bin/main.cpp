@@ -23,6 +23,7 @@ const std::map<std::string, Command>& commands() {
       {"simulate", {ssrfleet::cli::run_simulate, "simulate a fleet over a road and write a WIM log"}},
       {"road", {ssrfleet::cli::run_road, "write a preset road surface or summarise a road file"}},
       {"fit", {ssrfleet::cli::run_fit, "fit the fleet posterior to a WIM log (SMC, or the batch MCMC)"}},
+      {"stream", {ssrfleet::cli::run_stream, "update the posterior truck by truck from a live WIM stream (crash-safe)"}},
       {"predict", {ssrfleet::cli::run_predict, "predict the SSR pattern from a posterior, on this road or another"}},
       {"reproduce", {ssrfleet::cli::run_reproduce, "the paper's theoretical test end to end: figure data, plots, summary.md"}},
   };

@@ -1,5 +1,7 @@
 #include "fleet/fleet_smc.hpp"
 
+#include <tuple>
+
 #include "util/errors.hpp"
 
 namespace ssrfleet::fleet {
@@ -26,10 +28,52 @@ FleetSmc::FleetSmc(const site::Site& site, Options options)
 
 const smc::StageSummary& FleetSmc::absorb(const io::WimRecord& record) {
   target_.add_truck(record, sampler_.model_rngs().child(kNewTruckDraws), parallel_);
-  speed_mps_.push_back(record.speed_mps);
-  sprung_mass_kg_.push_back(record.sprung_mass_kg);
+  truck_ids_.push_back(record.truck_id);
   sampler_.run_stage(target_, "truck '" + record.truck_id + "' (#" + std::to_string(target_.trucks()) + ")");
   return sampler_.history().back();
+}
+
+namespace {
+constexpr std::uint64_t kCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
+constexpr std::uint32_t kCheckpointVersion = 1;
+}  // namespace
+
+void FleetSmc::save(io::BinaryWriter& out) const {
+  out.value(kCheckpointMagic);
+  out.value(kCheckpointVersion);
+  out.text(site_.fingerprint());
+  out.value<std::uint64_t>(sampler_.options().seed);
+  const auto state = sampler_.state();
+  out.value<std::int32_t>(state.stages_run);
+  out.value(state.log_evidence);
+  out.matrix(state.log_weights.matrix());
+  out.value<std::uint64_t>(truck_ids_.size());
+  for (const auto& id : truck_ids_) out.text(id);
+  target_.save(out);
+}
+
+void FleetSmc::restore(io::BinaryReader& in) {
+  if (in.value<std::uint64_t>("magic") != kCheckpointMagic) in.fail("magic", "not an ssrfleet checkpoint");
+  if (in.value<std::uint32_t>("version") != kCheckpointVersion) in.fail("version", "unsupported checkpoint version");
+  if (in.text("site") != site_.fingerprint()) {
+    in.fail("site", "the checkpoint belongs to another site (road or site options differ)");
+  }
+  if (in.value<std::uint64_t>("seed") != sampler_.options().seed) {
+    in.fail("seed", "the checkpoint was made with another seed; resume with the seed it started with");
+  }
+  smc::TemperedSampler::State state;
+  state.stages_run = in.value<std::int32_t>("stages_run");
+  state.log_evidence = in.value<double>("log_evidence");
+  state.log_weights = in.matrix("log_weights", sampler_.options().particles, 1).array();
+  const auto n = in.value<std::uint64_t>("truck_ids");
+  if (n > 100'000'000) in.fail("truck_ids", "implausible truck count");
+  truck_ids_.clear();
+  for (std::uint64_t j = 0; j < n; ++j) truck_ids_.push_back(in.text("truck_id"));
+  target_.load(in);
+  if (static_cast<std::uint64_t>(target_.trucks()) != n || state.stages_run != static_cast<int>(n)) {
+    in.fail("trucks", "truck count and stage count disagree");
+  }
+  sampler_.restore(state);
 }
 
 PosteriorCloud FleetSmc::cloud() const {
@@ -37,8 +81,7 @@ PosteriorCloud FleetSmc::cloud() const {
   c.method = "smc";
   c.theta = target_.theta();
   c.weights = sampler_.weights();
-  c.speed_mps = speed_mps_;
-  c.sprung_mass_kg = sprung_mass_kg_;
+  std::tie(c.speed_mps, c.sprung_mass_kg) = target_.observed_speeds_and_masses();
   c.site_fingerprint = site_.fingerprint();
   c.road_name = site_.surface().name;
   c.sensors = site_.sensors();

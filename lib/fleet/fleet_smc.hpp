@@ -3,6 +3,10 @@
 #pragma once
 
 #include <memory>
+#include <string>
+#include <vector>
+
+#include "io/binary_io.hpp"
 
 #include "fleet/fleet_target.hpp"
 #include "fleet/posterior_cloud.hpp"
@@ -41,13 +45,20 @@ class FleetSmc {
   const FleetTarget& target() const { return target_; }
   const smc::TemperedSampler& sampler() const { return sampler_; }
   PosteriorCloud cloud() const;
+  const std::vector<std::string>& truck_ids() const { return truck_ids_; }
+
+  // Checkpoint of everything the next truck depends on (sampler state, particles, data), so a
+  // run restored from it continues bit-identically. restore() expects an object built with the
+  // same site and options; a checkpoint of another site or particle count is a DataError.
+  void save(io::BinaryWriter& out) const;
+  void restore(io::BinaryReader& in);
 
  private:
   const site::Site& site_;
   FleetTarget target_;
   smc::TemperedSampler sampler_;
   smc::ParallelFor parallel_;  // for the model's own work between stages (same threads as the engine)
-  std::vector<double> speed_mps_, sprung_mass_kg_;
+  std::vector<std::string> truck_ids_;
 };
 
 }  // namespace ssrfleet::fleet

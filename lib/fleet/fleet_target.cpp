@@ -292,6 +292,47 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
   });
 }
 
+void FleetTarget::save(io::BinaryWriter& out) const {
+  out.value<std::int64_t>(options_.particles);
+  out.value<std::int32_t>(sensors_);
+  out.value<std::int64_t>(trucks());
+  for (Eigen::Index j = 0; j < trucks(); ++j) {
+    out.value(speed_mps_[static_cast<std::size_t>(j)]);
+    out.value(sprung_mass_kg_[static_cast<std::size_t>(j)]);
+    out.matrix(observed_if_[static_cast<std::size_t>(j)]);
+  }
+  out.matrix(theta_);
+  out.matrix(latents_);
+  out.matrix(ssr_);
+  out.value<std::uint64_t>(older_scale_.size());
+  for (double v : older_scale_) out.value(v);
+}
+
+void FleetTarget::load(io::BinaryReader& in) {
+  const Eigen::Index P = options_.particles;
+  if (in.value<std::int64_t>("particles") != P) in.fail("particles", "saved with another particle count");
+  if (in.value<std::int32_t>("sensors") != sensors_) in.fail("sensors", "saved for another sensor count");
+  const auto n = in.value<std::int64_t>("trucks");
+  if (n < 0 || n > 100'000'000) in.fail("trucks", "implausible truck count");
+  speed_mps_.clear();
+  sprung_mass_kg_.clear();
+  observed_if_.clear();
+  for (std::int64_t j = 0; j < n; ++j) {
+    speed_mps_.push_back(in.value<double>("speed_mps"));
+    sprung_mass_kg_.push_back(in.value<double>("sprung_mass_kg"));
+    observed_if_.push_back(in.matrix("impact_factor", sensors_, 1));
+  }
+  theta_ = in.matrix("theta", kHyperCount, P);
+  latents_ = in.matrix("latents", 3 * n, P);
+  ssr_ = in.matrix("ssr", n, P);
+  const auto scales = in.value<std::uint64_t>("older_scale");
+  if (scales != static_cast<std::uint64_t>(n > 0 ? n - 1 : 0)) in.fail("older_scale", "size does not match the trucks");
+  older_scale_.assign(scales, 1.0);
+  for (auto& v : older_scale_) v = in.value<double>("older_scale");
+  older_sweeps_done_ = 0;
+  for (Eigen::Index i = 0; i < P; ++i) recompute_sums(i);
+}
+
 void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
                                      bool stiffness_from_prior) {
   const Eigen::Index P = options_.particles, older = trucks() - 1;

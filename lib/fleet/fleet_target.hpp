@@ -24,6 +24,7 @@
 #include <Eigen/Core>
 
 #include "fleet/fleet_model.hpp"
+#include "io/binary_io.hpp"
 #include "io/wim_log.hpp"
 #include "site/site.hpp"
 #include "smc/target.hpp"
@@ -51,8 +52,16 @@ class FleetTarget final : public smc::TemperedModel {
   // Latents of truck j for every particle: 3 x P (k, k_t, z).
   Eigen::MatrixXd truck_latents(Eigen::Index truck) const;
   const Eigen::MatrixXd& sums_of_squared_residuals() const { return ssr_; }  // trucks x P
+  std::pair<std::vector<double>, std::vector<double>> observed_speeds_and_masses() const {
+    return {speed_mps_, sprung_mass_kg_};
+  }
   long long integrator_passes() const { return passes_; }
   double older_acceptance() const { return older_acceptance_; }
+
+  // Checkpoint: the particles and the data absorbed, exactly (binary_io.hpp). load() expects a
+  // target built with the same site and options; DataError if the saved one does not fit.
+  void save(io::BinaryWriter& out) const;
+  void load(io::BinaryReader& in);
 
   // smc::TemperedModel
   Eigen::Index particles() const override { return options_.particles; }

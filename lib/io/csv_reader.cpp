@@ -44,6 +44,14 @@ CsvReader::CsvReader(std::istream& in, std::string source_name)
 bool CsvReader::next(CsvRow& row) {
   std::string line;
   while (std::getline(in_, line)) {
+    if (in_.eof() && follow_) {  // no newline yet: the writer is mid-record
+      partial_ += line;
+      return false;
+    }
+    if (!partial_.empty()) {
+      line = partial_ + line;
+      partial_.clear();
+    }
     ++line_;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (is_skippable(line)) continue;

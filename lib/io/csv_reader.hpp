@@ -28,6 +28,10 @@ class CsvReader {
   // Reads the next non-comment, non-blank line. Returns false at end of input.
   bool next(CsvRow& row);
 
+  // In follow mode a last line without its newline is a record still being written: it is held
+  // back until the rest arrives (call next() again after clearing the stream's EOF state).
+  void set_follow(bool follow) { follow_ = follow; }
+
   const std::string& source_name() const { return source_name_; }
   std::size_t lines_read() const { return line_; }
 
@@ -35,6 +39,8 @@ class CsvReader {
   std::istream& in_;
   std::string source_name_;
   std::size_t line_ = 0;
+  bool follow_ = false;
+  std::string partial_;
 };
 
 // Parses a whole field as a finite double. Throws DataError(source, line, field, reason) on

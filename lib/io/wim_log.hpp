@@ -71,6 +71,7 @@ class WimLogReader {
   // Truck ids the reader treats as already absorbed (e.g. after a resume): a later record with
   // one of these ids is rejected as a duplicate.
   void mark_seen(const std::string& truck_id) { seen_.insert(truck_id); }
+  void set_follow(bool follow) { csv_.set_follow(follow); }
 
  private:
   WimRecord parse(const CsvRow& row) const;

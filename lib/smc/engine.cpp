@@ -67,6 +67,17 @@ RngFactory TemperedSampler::model_rngs() const {
 
 Eigen::ArrayXd TemperedSampler::weights() const { return log_weights_.exp(); }
 
+void TemperedSampler::restore(const State& state) {
+  if (state.log_weights.size() != options_.particles || state.stages_run < 0) {
+    throw UsageError("TemperedSampler::restore: the saved state has " + std::to_string(state.log_weights.size()) +
+                     " particles but options.particles is " + std::to_string(options_.particles));
+  }
+  stages_run_ = state.stages_run;
+  log_evidence_ = state.log_evidence;
+  log_weights_ = state.log_weights;
+  history_.clear();
+}
+
 double TemperedSampler::ess() const { return effective_sample_size(weights()); }
 
 StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view label) {

@@ -104,6 +104,18 @@ class TemperedSampler {
   double ess() const;
   const std::vector<StageSummary>& history() const { return history_; }
 
+  // What a checkpoint must keep to continue bit-identically: every random stream is keyed by
+  // the stage count, so with the model's particles restored the next stage is the same as in an
+  // uninterrupted run. (The per-stage history is a report, not state, and is not restored.)
+  struct State {
+    int stages_run = 0;
+    double log_evidence = 0.0;
+    Eigen::ArrayXd log_weights;
+  };
+  State state() const { return {stages_run_, log_evidence_, log_weights_}; }
+  // UsageError if the weights do not match options().particles.
+  void restore(const State& state);
+
  private:
   Options options_;
   ParallelFor parallel_;

@@ -1,0 +1,75 @@
+// Online operation (DESIGN.md §4, issue "ssrfleet stream"): WIM records arrive one at a time,
+// each good one is absorbed into the fleet posterior as one SMC stage, and the state directory
+// always holds a consistent posterior and a checkpoint to resume from.
+//
+// State directory:
+//   checkpoint.bin   everything the next truck depends on (FleetSmc::save) plus the stream's
+//                    own bookkeeping; rewritten atomically after every absorbed truck
+//   posterior.json   the posterior file `predict --posterior DIR` reads; rewritten atomically
+//   rejects.csv      every rejected record verbatim, each after a '# line N: reason' comment, under
+//                    a copy of the input's header, so it is itself a WIM log to fix and replay
+//
+// Resuming: with checkpoint.bin present, the stream restores it, cuts rejects.csv back to what it
+// held at that checkpoint, skips the input's lines up to the checkpoint (same input) and any
+// record whose truck_id was already absorbed, and goes on. The result is bit-identical to an
+// uninterrupted run with the same seed; no accepted record is absorbed twice or lost.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <istream>
+#include <ostream>
+#include <string>
+
+#include "fleet/fleet_smc.hpp"
+#include "predict/ssr_prediction.hpp"
+#include "site/site.hpp"
+
+namespace ssrfleet::stream {
+
+struct StreamOptions {
+  std::string state_dir;
+  int report_every = 0;         // print the SSR table every N absorbed trucks (0 = only at the end)
+  bool follow = false;          // at end of input, wait for more (like tail -f) until stopped
+  double follow_poll_s = 0.25;  // how often to look for more input in follow mode
+  fleet::FleetSmc::Options smc;
+  predict::PredictionOptions prediction;
+};
+
+struct StreamCounts {
+  long absorbed = 0;  // this run
+  long rejected = 0;  // this run
+  long skipped = 0;   // already absorbed before a resume
+  long total_absorbed = 0;  // in the posterior, over all runs
+};
+
+class WimStream {
+ public:
+  // Creates the state directory if needed and resumes from its checkpoint if one is there.
+  // progress: one line per truck and per rejected record (nullptr = silent); reports: the SSR
+  // tables (stdout in the command).
+  WimStream(const site::Site& site, StreamOptions options, std::ostream* progress, std::ostream& reports);
+
+  bool resumed() const { return resumed_; }
+
+  // Reads records from `in` until its end (or, following, until `stop` is set). `source` names
+  // the input in messages and in the checkpoint (a resume skips by line only on the same source).
+  StreamCounts run(std::istream& in, const std::string& source, const std::atomic<bool>& stop);
+
+ private:
+  void save_state(const std::string& source, std::size_t lines_consumed) const;
+  void report() const;
+
+  const site::Site& site_;
+  StreamOptions options_;
+  std::ostream* progress_;
+  std::ostream& reports_;
+  fleet::FleetSmc smc_;
+  bool resumed_ = false;
+  // Bookkeeping restored from the checkpoint.
+  std::string checkpoint_source_;
+  std::size_t checkpoint_lines_ = 0;
+  std::uint64_t rejects_bytes_ = 0;
+};
+
+}  // namespace ssrfleet::stream

@@ -1,0 +1,211 @@
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fcntl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include <catch2/catch.hpp>
+
+#include "io/csv_reader.hpp"
+#include "io/posterior_json.hpp"
+#include "test_support.hpp"
+
+extern char** environ;
+
+using namespace ssrfleet;
+using test::run_ssrfleet;
+
+namespace {
+std::string q(const std::string& p) { return "'" + p + "'"; }
+
+// Starts `ssrfleet args...` in the background with stdout and stderr to /dev/null.
+pid_t spawn_ssrfleet(const std::vector<std::string>& args) {
+  std::vector<std::string> all = {SSRFLEET_BINARY};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, SSRFLEET_BINARY, &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  REQUIRE(rc == 0);
+  return pid;
+}
+
+int wait_for(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+}
+
+long trucks_in(const std::string& state_dir) {
+  try {
+    return io::read_posterior_file(state_dir).trucks_seen;
+  } catch (const std::exception&) {
+    return 0;
+  }
+}
+
+std::vector<std::string> stream_args(const std::string& state, const std::string& log) {
+  return {"stream", "--state", state, "--input", log, "--particles", "96", "--threads", "2", "--seed", "4", "--quiet"};
+}
+}  // namespace
+
+TEST_CASE("a stream gives the same posterior as fit on the same log", "[cli][stream]") {
+  test::TempDir dir;
+  const std::string log = dir.file("log.csv");
+  REQUIRE(run_ssrfleet("simulate --trucks 10 --seed 8 --quiet --out " + q(log), dir).status == 0);
+  REQUIRE(run_ssrfleet("fit " + q(log) + " --particles 96 --seed 4 --quiet --out " + q(dir.file("fit.json")), dir).status == 0);
+  const auto r = run_ssrfleet("stream --state " + q(dir.file("state")) + " --input " + q(log) +
+                                  " --particles 96 --seed 4 --quiet --report-every 5",
+                              dir);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  CHECK(test::read_text(dir.file("fit.json")) == test::read_text(dir.file("state") + "/posterior.json"));
+  // Reports after 5 and 10 trucks (and the final one at the end of input).
+  CHECK(r.out.find("# SSR prediction after 5 trucks") != std::string::npos);
+  CHECK(r.out.find("# SSR prediction after 10 trucks") != std::string::npos);
+  // Standard input works the same.
+  const std::string cmd = std::string("'") + SSRFLEET_BINARY + "' stream --state " + q(dir.file("state3")) +
+                          " --particles 96 --seed 4 --quiet < " + q(log) + " > /dev/null 2>&1";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  CHECK(test::read_text(dir.file("fit.json")) == test::read_text(dir.file("state3") + "/posterior.json"));
+}
+
+TEST_CASE("a stream killed with SIGKILL at several points resumes to the bit-identical posterior", "[cli][stream]") {
+  test::TempDir dir;
+  const std::string log = dir.file("log.csv");
+  REQUIRE(run_ssrfleet("simulate --trucks 30 --seed 2 --quiet --out " + q(log), dir).status == 0);
+  // Salt a few bad records in, so the rejects list is checked for duplicates too.
+  std::string text = test::read_text(log);
+  const auto pos = text.find("\nT0005");
+  text.insert(pos + 1, "BAD1,oops,4000,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1\n");
+  const auto pos2 = text.find("\nT0020");
+  text.insert(pos2 + 1, "BAD2,20,4000,nan,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1\n");
+  test::write_text(log, text);
+
+  const std::string reference = dir.file("reference");
+  REQUIRE(wait_for(spawn_ssrfleet(stream_args(reference, log))) == 0);
+  REQUIRE(trucks_in(reference) == 30);
+
+  const std::string state = dir.file("state");
+  int kills = 0;
+  for (long kill_after : {3L, 11L, 19L, 26L}) {
+    const pid_t pid = spawn_ssrfleet(stream_args(state, log));
+    // Let it absorb up to `kill_after` trucks, then kill it mid-work without warning.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (trucks_in(state) < kill_after && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    if (kill(pid, SIGKILL) == 0) ++kills;
+    wait_for(pid);
+  }
+  CHECK(kills >= 3);
+  REQUIRE(wait_for(spawn_ssrfleet(stream_args(state, log))) == 0);
+  CHECK(trucks_in(state) == 30);
+  CHECK(test::read_text(state + "/posterior.json") == test::read_text(reference + "/posterior.json"));
+  CHECK(test::read_text(state + "/rejects.csv") == test::read_text(reference + "/rejects.csv"));
+}
+
+TEST_CASE("a log salted with every kind of bad record absorbs exactly the good ones", "[cli][stream]") {
+  test::TempDir dir;
+  const std::string good = dir.file("good.csv");
+  REQUIRE(run_ssrfleet("simulate --trucks 8 --sensors 76,1.5,3 --seed 6 --quiet --out " + q(good), dir).status == 0);
+  // A log with a time column, 3 sensors, the good records, and one bad record of each kind.
+  std::ifstream in(good);
+  std::string line, body;
+  std::vector<std::string> good_rows;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#' || line.rfind("truck_id", 0) == 0) continue;
+    const auto comma = line.find(',');
+    good_rows.push_back(line.substr(0, comma) + ",0" + line.substr(comma));  // insert time_s
+  }
+  REQUIRE(good_rows.size() == 8);
+  const std::vector<std::string> bad = {
+      "B01,0,23,4400,1.0,1.0",              // too few columns
+      "B02,0,23,4400,1.0,1.0,1.0,1.0",      // too many columns
+      "B03,0,fast,4400,1.0,1.0,1.0",        // speed not a number
+      "B04,0,nan,4400,1.0,1.0,1.0",         // speed NaN
+      "B05,0,inf,4400,1.0,1.0,1.0",         // speed infinite
+      "B06,0,-23,4400,1.0,1.0,1.0",         // speed negative
+      "B07,0,0,4400,1.0,1.0,1.0",           // speed zero
+      "B08,0,200,4400,1.0,1.0,1.0",         // speed impossible
+      "B09,0,23,heavy,1.0,1.0,1.0",         // mass not a number
+      "B10,0,23,NaN,1.0,1.0,1.0",           // mass NaN
+      "B11,0,23,0,1.0,1.0,1.0",             // mass zero
+      "B12,0,23,1e7,1.0,1.0,1.0",           // mass impossible
+      "B13,0,23,4400,abc,1.0,1.0",          // IF not a number
+      "B14,0,23,4400,1.0,nan,1.0",          // IF NaN
+      "B15,0,23,4400,1.0,1.0,-0.5",         // IF negative
+      "B16,0,23,4400,9.0,1.0,1.0",          // IF impossible
+      "B17,0,23,4400,1.0,inf,1.0",          // IF infinite
+      ",0,23,4400,1.0,1.0,1.0",             // empty truck_id
+      "T0001,0,23,4400,1.0,1.0,1.0",        // duplicate truck_id (of a good one before it)
+      "B20,0,,4400,1.0,1.0,1.0",            // empty speed
+      "B21,0,23,4400,1.0,,1.0",             // empty IF
+      "B22,noon,23,4400,1.0,1.0,1.0",       // time not a number
+      "B23,0,23.4m/s,4400,1.0,1.0,1.0",     // speed with trailing junk
+      "B24,0,23,4400,1.0,1.0,1e999",        // IF overflows
+  };
+  std::string text = "# salted\ntruck_id,time_s,speed_mps,sprung_mass_kg,if_1,if_2,if_3\n";
+  for (std::size_t i = 0; i < good_rows.size(); ++i) {
+    text += good_rows[i] + "\n";
+    for (std::size_t b = i * 3; b < std::min(bad.size(), i * 3 + 3); ++b) text += bad[b] + "\n";
+  }
+  const std::string log = dir.file("salted.csv");
+  test::write_text(log, text);
+  const auto r = run_ssrfleet("stream --state " + q(dir.file("state")) + " --input " + q(log) +
+                                  " --sensors 76,1.5,3 --particles 64 --seed 1",
+                              dir);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  CHECK(trucks_in(dir.file("state")) == 8);
+  CHECK(r.err.find("8 trucks absorbed, 24 rejected") != std::string::npos);
+  const std::string rejects = test::read_text(dir.file("state") + "/rejects.csv");
+  for (const auto& b : bad) {
+    INFO(b);
+    CHECK(rejects.find("\n" + b + "\n") != std::string::npos);  // verbatim
+  }
+  CHECK(std::count(rejects.begin(), rejects.end(), '\n') == 2 + 2 * 24);  // header lines + reason and record each
+  // Every rejection was reported on stderr with its line number.
+  CHECK(r.err.find("salted.csv:4: field 'columns'") != std::string::npos);
+}
+
+TEST_CASE("predict reading the state of a running stream always gets a valid posterior", "[cli][stream]") {
+  test::TempDir dir;
+  const std::string log = dir.file("log.csv");
+  REQUIRE(run_ssrfleet("simulate --trucks 40 --seed 3 --quiet --out " + q(log), dir).status == 0);
+  const std::string state = dir.file("state");
+  const pid_t pid = spawn_ssrfleet(stream_args(state, log));
+  int reads = 0, bad_reads = 0;
+  long last = 0;
+  bool running = true;
+  while (running) {
+    running = waitpid(pid, nullptr, WNOHANG) == 0;
+    if (!std::filesystem::exists(state + "/posterior.json")) continue;
+    try {
+      const auto cloud = io::read_posterior_file(state);
+      CHECK(cloud.trucks_seen >= last);  // never goes back
+      last = cloud.trucks_seen;
+      ++reads;
+    } catch (const std::exception& e) {
+      ++bad_reads;
+      FAIL_CHECK("read a broken posterior: " << e.what());
+    }
+  }
+  INFO(reads << " reads while the stream ran");
+  CHECK(reads > 10);
+  CHECK(bad_reads == 0);
+  CHECK(last == 40);
+}
