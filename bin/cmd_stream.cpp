@@ -51,6 +51,8 @@ int run_stream(int argc, const char* const argv[]) {
       ("particles", po::value(&particles)->default_value(particles), "number of particles P (>= 2)")
       ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (a resume must use the same one)")
+      ("window", po::value(&options.smc.window)->default_value(0),
+       "bounded memory: keep and move only the last W trucks' latents, older ones as sufficient statistics (0 = exact)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   site_flags.add_to(desc);
   po::variables_map vm;

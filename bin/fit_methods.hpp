@@ -18,6 +18,7 @@ struct FitFlags {
   long particles = 1024;
   int threads = 0;  // 0 = all cores
   int older_sweeps = 2;
+  long window = 0;  // bounded memory (see stream --window)
   double cess_target = 0.9;
   int max_sweeps = 5;
   long iterations = 20000;  // mcmc

@@ -20,6 +20,8 @@ void FitFlags::add_to(po::options_description& desc) {
        "MH sweeps over every older truck's latents after each new truck (0 = off)")
       ("cess", po::value(&cess_target)->default_value(cess_target), "conditional-ESS target of each tempering step, in (0, 1)")
       ("max-sweeps", po::value(&max_sweeps)->default_value(max_sweeps), "MCMC sweeps per tempering step at most")
+      ("window", po::value(&window)->default_value(window),
+       "keep and move only the last W trucks' latents per particle; older ones as sufficient statistics (0 = exact)")
       ("verbose", po::bool_switch(&verbose), "report every tempering step (phi, ESS, acceptance and jump per block)");
   po::options_description mcmc("MCMC options (--method mcmc)");
   mcmc.add_options()
@@ -38,6 +40,8 @@ fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<io::WimR
   o.sampler.tempering.cess_target = flags.cess_target;
   o.sampler.mh.max_steps = flags.max_sweeps;
   o.older_sweeps = flags.older_sweeps;
+  if (flags.window < 0) throw UsageError("--window must be >= 0");
+  o.window = flags.window;
   std::string why;
   if (!o.sampler.IsValid(&why)) throw UsageError(why);
   fleet::FleetSmc smc(site, o);

@@ -1,4 +1,5 @@
 #include <cmath>
+#include <sstream>
 
 #include <catch2/catch.hpp>
 
@@ -7,6 +8,7 @@
 #include "fleet/fleet_smc.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/simulator.hpp"
+#include "io/binary_io.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/road_source.hpp"
 
@@ -154,4 +156,55 @@ TEST_CASE("the SMC survives the paper's literal noise variance 0.2 where particl
   INFO("sigma_IF [" << s[fleet::kSigmaIf].q025 << ", " << s[fleet::kSigmaIf].q975 << "]");
   CHECK(s[fleet::kSigmaIf].q025 <= std::sqrt(0.2));
   CHECK(s[fleet::kSigmaIf].q975 >= std::sqrt(0.2));
+}
+
+TEST_CASE("a checkpoint restored into a fresh sampler continues bit-identically in exact and windowed mode",
+          "[fleet][smc][stream]") {
+  Case c(15, 9);
+  for (Eigen::Index window : {Eigen::Index{0}, Eigen::Index{5}}) {
+    INFO("window " << window);
+    auto options = smc_options(64, 2, 3);
+    options.window = window;
+    fleet::FleetSmc straight(c.site, options);
+    for (const auto& r : c.log.records) straight.absorb(r);
+
+    fleet::FleetSmc first(c.site, options);
+    for (int t = 0; t < 8; ++t) first.absorb(c.log.records[static_cast<std::size_t>(t)]);
+    std::stringstream checkpoint;
+    io::BinaryWriter writer(checkpoint);
+    first.save(writer);
+    fleet::FleetSmc resumed(c.site, options);
+    io::BinaryReader reader(checkpoint, "checkpoint");
+    resumed.restore(reader);
+    for (std::size_t t = 8; t < c.log.records.size(); ++t) resumed.absorb(c.log.records[t]);
+
+    CHECK((resumed.cloud().theta.array() == straight.cloud().theta.array()).all());
+    CHECK((resumed.cloud().weights == straight.cloud().weights).all());
+    CHECK(resumed.cloud().log_evidence == straight.cloud().log_evidence);
+    CHECK(resumed.trucks_seen() == 15);
+    // Bounded memory: only the window's latents (plus the newest truck) are kept.
+    CHECK(straight.target().kept_trucks() == (window > 0 ? window + 1 : 15));
+  }
+}
+
+TEST_CASE("a checkpoint from another seed or a corrupt one is refused", "[fleet][smc][stream]") {
+  Case c(3, 2);
+  fleet::FleetSmc a(c.site, smc_options(32, 1, 1));
+  for (const auto& r : c.log.records) a.absorb(r);
+  std::stringstream checkpoint;
+  io::BinaryWriter writer(checkpoint);
+  a.save(writer);
+  const std::string bytes = checkpoint.str();
+  {
+    fleet::FleetSmc other_seed(c.site, smc_options(32, 1, 2));
+    std::stringstream in(bytes);
+    io::BinaryReader reader(in, "ck.bin");
+    CHECK_THROWS_WITH(other_seed.restore(reader), Catch::Contains("another seed"));
+  }
+  {
+    fleet::FleetSmc same(c.site, smc_options(32, 1, 1));
+    std::stringstream in(bytes.substr(0, bytes.size() / 2));  // truncated
+    io::BinaryReader reader(in, "ck.bin");
+    CHECK_THROWS_WITH(same.restore(reader), Catch::Contains("ck.bin") && Catch::Contains("ends early"));
+  }
 }

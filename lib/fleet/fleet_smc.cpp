@@ -12,6 +12,7 @@ FleetTarget::Options target_options(const FleetSmc::Options& o) {
   t.particles = o.sampler.particles;
   t.prior = o.prior;
   t.older_sweeps = o.older_sweeps;
+  t.window = o.window;
   return t;
 }
 
@@ -21,7 +22,7 @@ constexpr std::uint64_t kNewTruckDraws = 1;
 }  // namespace
 
 FleetSmc::FleetSmc(const site::Site& site, Options options)
-    : site_(site), target_(site, target_options(options)), sampler_(options.sampler),
+    : site_(site), target_(site, target_options(options)), sampler_(options.sampler), window_(options.window),
       parallel_(options.sampler.threads) {
   target_.initialise(sampler_.model_rngs().child(kInitialDraws));
 }
@@ -29,6 +30,7 @@ FleetSmc::FleetSmc(const site::Site& site, Options options)
 const smc::StageSummary& FleetSmc::absorb(const io::WimRecord& record) {
   target_.add_truck(record, sampler_.model_rngs().child(kNewTruckDraws), parallel_);
   truck_ids_.push_back(record.truck_id);
+  if (window_ > 0 && truck_ids_.size() > FleetTarget::kPredictionPool) truck_ids_.pop_front();
   sampler_.run_stage(target_, "truck '" + record.truck_id + "' (#" + std::to_string(target_.trucks()) + ")");
   return sampler_.history().back();
 }
@@ -70,7 +72,7 @@ void FleetSmc::restore(io::BinaryReader& in) {
   truck_ids_.clear();
   for (std::uint64_t j = 0; j < n; ++j) truck_ids_.push_back(in.text("truck_id"));
   target_.load(in);
-  if (static_cast<std::uint64_t>(target_.trucks()) != n || state.stages_run != static_cast<int>(n)) {
+  if (state.stages_run != static_cast<int>(target_.trucks()) || n > static_cast<std::uint64_t>(target_.trucks())) {
     in.fail("trucks", "truck count and stage count disagree");
   }
   sampler_.restore(state);

@@ -2,6 +2,7 @@
 // (DESIGN.md §4), and can hand out the current posterior at any moment.
 #pragma once
 
+#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,6 +33,7 @@ class FleetSmc {
     // quarter posterior sd of a long MCMC on the paper's case; one left them 0.4 sd low.
     int older_sweeps = 2;
     PriorBounds prior;
+    Eigen::Index window = 0;  // FleetTarget::Options::window: 0 = exact, W = bounded memory
   };
 
   // UsageError on invalid options (the sampler's IsValid message).
@@ -45,7 +47,9 @@ class FleetSmc {
   const FleetTarget& target() const { return target_; }
   const smc::TemperedSampler& sampler() const { return sampler_; }
   PosteriorCloud cloud() const;
-  const std::vector<std::string>& truck_ids() const { return truck_ids_; }
+  // Ids of the trucks absorbed: all of them, or in windowed mode the most recent
+  // FleetTarget::kPredictionPool (a resume then skips older records by line number).
+  const std::deque<std::string>& truck_ids() const { return truck_ids_; }
 
   // Checkpoint of everything the next truck depends on (sampler state, particles, data), so a
   // run restored from it continues bit-identically. restore() expects an object built with the
@@ -57,8 +61,9 @@ class FleetSmc {
   const site::Site& site_;
   FleetTarget target_;
   smc::TemperedSampler sampler_;
+  Eigen::Index window_ = 0;
   smc::ParallelFor parallel_;  // for the model's own work between stages (same threads as the engine)
-  std::vector<std::string> truck_ids_;
+  std::deque<std::string> truck_ids_;
 };
 
 }  // namespace ssrfleet::fleet

@@ -41,8 +41,10 @@ FleetTarget::FleetTarget(const site::Site& site, Options options)
     throw UsageError("fleet target: particles is " + std::to_string(options_.particles) + ", but must be at least 2");
   }
   if (options_.older_sweeps < 0) throw UsageError("fleet target: older_sweeps must be >= 0");
+  if (options_.window < 0) throw UsageError("fleet target: window must be >= 0");
   theta_.resize(kHyperCount, options_.particles);
   sums_ = Eigen::MatrixXd::Zero(kSumCount, options_.particles);
+  retired_ = Eigen::MatrixXd::Zero(kSumCount, options_.particles);
 }
 
 HyperVector FleetTarget::theta_of(Eigen::Index particle) const {
@@ -60,9 +62,14 @@ void FleetTarget::initialise(const smc::RngFactory& rngs) {
   latents_.resize(0, options_.particles);
   ssr_.resize(0, options_.particles);
   sums_.setZero();
+  retired_.setZero();
+  total_trucks_ = 0;
   speed_mps_.clear();
   sprung_mass_kg_.clear();
   observed_if_.clear();
+  pool_speed_mps_.clear();
+  pool_sprung_mass_kg_.clear();
+  older_scale_.clear();
 }
 
 void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& rngs,
@@ -71,7 +78,14 @@ void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& 
     throw DataError("truck '" + record.truck_id + "' has " + std::to_string(record.impact_factor.size()) +
                     " impact factors but the site has " + std::to_string(sensors_) + " sensors");
   }
-  const Eigen::Index n = trucks();
+  const Eigen::Index n = kept_trucks();
+  ++total_trucks_;
+  pool_speed_mps_.push_back(record.speed_mps);
+  pool_sprung_mass_kg_.push_back(record.sprung_mass_kg);
+  if (options_.window > 0 && pool_speed_mps_.size() > kPredictionPool) {
+    pool_speed_mps_.pop_front();
+    pool_sprung_mass_kg_.pop_front();
+  }
   speed_mps_.push_back(record.speed_mps);
   sprung_mass_kg_.push_back(record.sprung_mass_kg);
   observed_if_.push_back(record.impact_factor);
@@ -92,18 +106,38 @@ void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& 
   Eigen::ArrayXd ssr(P);
   residuals(n, latents_.middleRows(3 * n, 3), ssr, parallel);
   ssr_.row(n) = ssr.matrix().transpose();
+  older_scale_.resize(static_cast<std::size_t>(n), 1.0);  // the truck that was newest joins the older ones
+  if (options_.window > 0 && kept_trucks() > options_.window + 1) retire_oldest_kept_truck();
   // The previous newest truck is an older one now: fold it into the running sums.
   for (Eigen::Index i = 0; i < P; ++i) recompute_sums(i);
-
   older_sweeps_done_ = 0;
-  older_scale_.resize(static_cast<std::size_t>(n), 1.0);  // the truck that was newest joins the older ones
+}
+
+void FleetTarget::retire_oldest_kept_truck() {
+  for (Eigen::Index i = 0; i < options_.particles; ++i) {
+    const double k = latents_(kStiffness, i), kt = latents_(kTyreStiffness, i), z = latents_(kLateral, i);
+    retired_(kSumK, i) += k;
+    retired_(kSumK2, i) += k * k;
+    retired_(kSumKt, i) += kt;
+    retired_(kSumKt2, i) += kt * kt;
+    retired_(kSumZ, i) += z;
+    retired_(kSumZ2, i) += z * z;
+    retired_(kSumSsr, i) += ssr_(0, i);
+  }
+  latents_ = latents_.bottomRows(latents_.rows() - 3).eval();
+  ssr_ = ssr_.bottomRows(ssr_.rows() - 1).eval();
+  speed_mps_.erase(speed_mps_.begin());
+  sprung_mass_kg_.erase(sprung_mass_kg_.begin());
+  observed_if_.erase(observed_if_.begin());
+  older_scale_.erase(older_scale_.begin());
 }
 
 Eigen::MatrixXd FleetTarget::truck_latents(Eigen::Index truck) const { return latents_.middleRows(3 * truck, 3); }
 
 void FleetTarget::recompute_sums(Eigen::Index i) {
-  double s[kSumCount] = {};
-  for (Eigen::Index j = 0; j + 1 < trucks(); ++j) {
+  double s[kSumCount];
+  for (int c = 0; c < kSumCount; ++c) s[c] = retired_(c, i);
+  for (Eigen::Index j = 0; j + 1 < kept_trucks(); ++j) {
     const double k = latents_(3 * j + kStiffness, i), kt = latents_(3 * j + kTyreStiffness, i),
                  z = latents_(3 * j + kLateral, i);
     s[kSumK] += k;
@@ -179,7 +213,7 @@ void FleetTarget::residuals(Eigen::Index truck, const Eigen::Ref<const Eigen::Ma
 
 void FleetTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
                               const smc::ParallelFor& /*parallel*/) {
-  const Eigen::Index newest = trucks() - 1;
+  const Eigen::Index newest = kept_trucks() - 1;
   for (Eigen::Index i = 0; i < options_.particles; ++i) {
     const HyperVector t = theta_of(i);
     log_base[i] = base_density(t, sums_.col(i).data(), latents_.col(i).data() + 3 * newest);
@@ -192,7 +226,7 @@ std::vector<smc::BlockSpec> FleetTarget::blocks() const {
 }
 
 void FleetTarget::get_block(int /*block*/, Eigen::Ref<Eigen::MatrixXd> values) const {
-  values = latents_.middleRows(3 * (trucks() - 1), 3);
+  values = latents_.middleRows(3 * (kept_trucks() - 1), 3);
 }
 
 void FleetTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen::MatrixXd>& proposed,
@@ -200,7 +234,7 @@ void FleetTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen::Ma
                                  const smc::ParallelFor& parallel) {
   const Eigen::Index P = options_.particles;
   proposed_ssr_.resize(P);
-  residuals(trucks() - 1, proposed, proposed_ssr_, parallel);
+  residuals(kept_trucks() - 1, proposed, proposed_ssr_, parallel);
   for (Eigen::Index i = 0; i < P; ++i) {
     const HyperVector t = theta_of(i);
     log_base[i] = base_density(t, sums_.col(i).data(), proposed.col(i).data());
@@ -210,7 +244,7 @@ void FleetTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen::Ma
 
 void FleetTarget::accept(int /*block*/, const std::vector<char>& accepted,
                          const Eigen::Ref<const Eigen::MatrixXd>& proposed) {
-  const Eigen::Index newest = trucks() - 1;
+  const Eigen::Index newest = kept_trucks() - 1;
   for (Eigen::Index i = 0; i < options_.particles; ++i) {
     if (!accepted[static_cast<std::size_t>(i)]) continue;
     latents_.block(3 * newest, i, 3, 1) = proposed.col(i);
@@ -223,11 +257,12 @@ void FleetTarget::resample(const std::vector<Eigen::Index>& ancestors) {
   latents_ = latents_(Eigen::all, ancestors).eval();
   ssr_ = ssr_(Eigen::all, ancestors).eval();
   sums_ = sums_(Eigen::all, ancestors).eval();
+  retired_ = retired_(Eigen::all, ancestors).eval();
 }
 
 void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
                                Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) {
-  if (phi == 1.0 && older_sweeps_done_ < options_.older_sweeps && trucks() >= 2) {
+  if (phi == 1.0 && older_sweeps_done_ < options_.older_sweeps && kept_trucks() >= 2) {
     // Alternate a random walk on (k, k_t, z) with an independence proposal of (k, k_t) from
     // p(k, k_t | θ): one truck's data say little about its stiffnesses, so the prior proposal
     // is accepted often and moves them across their whole range, which the spread parameters
@@ -235,7 +270,7 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
     older_trucks_sweep(rngs.child(1), parallel, older_sweeps_done_ % 2 == 1);
     ++older_sweeps_done_;
   }
-  const Eigen::Index newest = trucks() - 1;
+  const Eigen::Index newest = kept_trucks() - 1;
   const double n_all = static_cast<double>(trucks());  // the newest truck's latents are in γ in full
   const auto& prior = options_.prior;
   parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
@@ -295,8 +330,16 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
 void FleetTarget::save(io::BinaryWriter& out) const {
   out.value<std::int64_t>(options_.particles);
   out.value<std::int32_t>(sensors_);
-  out.value<std::int64_t>(trucks());
-  for (Eigen::Index j = 0; j < trucks(); ++j) {
+  out.value<std::int64_t>(options_.window);
+  out.value<std::int64_t>(total_trucks_);
+  out.matrix(retired_);
+  out.value<std::uint64_t>(pool_speed_mps_.size());
+  for (std::size_t j = 0; j < pool_speed_mps_.size(); ++j) {
+    out.value(pool_speed_mps_[j]);
+    out.value(pool_sprung_mass_kg_[j]);
+  }
+  out.value<std::int64_t>(kept_trucks());
+  for (Eigen::Index j = 0; j < kept_trucks(); ++j) {
     out.value(speed_mps_[static_cast<std::size_t>(j)]);
     out.value(sprung_mass_kg_[static_cast<std::size_t>(j)]);
     out.matrix(observed_if_[static_cast<std::size_t>(j)]);
@@ -312,7 +355,19 @@ void FleetTarget::load(io::BinaryReader& in) {
   const Eigen::Index P = options_.particles;
   if (in.value<std::int64_t>("particles") != P) in.fail("particles", "saved with another particle count");
   if (in.value<std::int32_t>("sensors") != sensors_) in.fail("sensors", "saved for another sensor count");
+  if (in.value<std::int64_t>("window") != options_.window) in.fail("window", "saved with another --window");
+  total_trucks_ = in.value<std::int64_t>("total_trucks");
+  retired_ = in.matrix("retired", kSumCount, P);
+  const auto pool = in.value<std::uint64_t>("pool");
+  if (pool > static_cast<std::uint64_t>(total_trucks_)) in.fail("pool", "larger than the trucks absorbed");
+  pool_speed_mps_.clear();
+  pool_sprung_mass_kg_.clear();
+  for (std::uint64_t j = 0; j < pool; ++j) {
+    pool_speed_mps_.push_back(in.value<double>("pool_speed_mps"));
+    pool_sprung_mass_kg_.push_back(in.value<double>("pool_sprung_mass_kg"));
+  }
   const auto n = in.value<std::int64_t>("trucks");
+  if (n > total_trucks_) in.fail("trucks", "more kept trucks than absorbed");
   if (n < 0 || n > 100'000'000) in.fail("trucks", "implausible truck count");
   speed_mps_.clear();
   sprung_mass_kg_.clear();
@@ -335,7 +390,7 @@ void FleetTarget::load(io::BinaryReader& in) {
 
 void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
                                      bool stiffness_from_prior) {
-  const Eigen::Index P = options_.particles, older = trucks() - 1;
+  const Eigen::Index P = options_.particles, older = kept_trucks() - 1;
   // Per truck: a proposal from the particle cloud's spread of that truck's latents (equal
   // weights: this runs right after a stage, whatever the weights), scaled by 2.38/√3 and by a
   // multiplier adapted on acceptance from stage to stage.

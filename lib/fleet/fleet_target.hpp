@@ -19,6 +19,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <vector>
 
 #include <Eigen/Core>
@@ -37,6 +38,11 @@ class FleetTarget final : public smc::TemperedModel {
     Eigen::Index particles = 1024;
     PriorBounds prior;
     int older_sweeps = 2;  // MH sweeps over every older truck's latents per stage; 0 = off
+    // Bounded memory: keep the latents of only the newest `window` older trucks per particle;
+    // an older truck leaving the window is folded into per-particle sufficient statistics
+    // (Σk, Σk², Σk_t, Σk_t², Σz, Σz², ΣSSR) and its latents are frozen from then on. 0 = exact
+    // (every truck's latents kept and moved, memory growing with the stream).
+    Eigen::Index window = 0;
   };
 
   FleetTarget(const site::Site& site, Options options);
@@ -47,14 +53,18 @@ class FleetTarget final : public smc::TemperedModel {
   // likelihood the increment of the next stage. The record's sensor count must match the site.
   void add_truck(const io::WimRecord& record, const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
 
-  Eigen::Index trucks() const { return static_cast<Eigen::Index>(speed_mps_.size()); }
+  Eigen::Index trucks() const { return total_trucks_; }              // absorbed so far
+  Eigen::Index kept_trucks() const { return static_cast<Eigen::Index>(speed_mps_.size()); }  // with latents
   const Eigen::MatrixXd& theta() const { return theta_; }  // 7 x P
-  // Latents of truck j for every particle: 3 x P (k, k_t, z).
+  // Latents of kept truck j (0 = the oldest kept) for every particle: 3 x P (k, k_t, z).
   Eigen::MatrixXd truck_latents(Eigen::Index truck) const;
   const Eigen::MatrixXd& sums_of_squared_residuals() const { return ssr_; }  // trucks x P
+  // Observed speeds and sprung masses for predictions: every truck, or in windowed mode the
+  // last kPredictionPool of them (so memory stays flat).
   std::pair<std::vector<double>, std::vector<double>> observed_speeds_and_masses() const {
-    return {speed_mps_, sprung_mass_kg_};
+    return {{pool_speed_mps_.begin(), pool_speed_mps_.end()}, {pool_sprung_mass_kg_.begin(), pool_sprung_mass_kg_.end()}};
   }
+  static constexpr std::size_t kPredictionPool = 10000;
   long long integrator_passes() const { return passes_; }
   double older_acceptance() const { return older_acceptance_; }
 
@@ -82,7 +92,7 @@ class FleetTarget final : public smc::TemperedModel {
                     Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) override;
 
  private:
-  // Running sums over the trucks before the newest (index < trucks()-1), per particle.
+  // Running sums over every truck before the newest (retired and kept), per particle.
   enum Sum : int { kSumK = 0, kSumK2, kSumKt, kSumKt2, kSumZ, kSumZ2, kSumSsr, kSumCount };
 
   double base_density(const HyperVector& theta, const double* sums,
@@ -110,7 +120,9 @@ class FleetTarget final : public smc::TemperedModel {
   Options options_;
   LateralRange lateral_;
   int sensors_ = 0;
-  // Observed data per truck.
+  void retire_oldest_kept_truck();
+
+  // Observed data per kept truck.
   std::vector<double> speed_mps_, sprung_mass_kg_;
   std::vector<Eigen::VectorXd> observed_if_;
   // Particle states.
@@ -118,6 +130,9 @@ class FleetTarget final : public smc::TemperedModel {
   Eigen::MatrixXd latents_;  // 3n x P: rows 3j..3j+2 = (k, k_t, z) of truck j
   Eigen::MatrixXd ssr_;      // n x P: sum of squared residuals of truck j
   Eigen::MatrixXd sums_;     // kSumCount x P (trucks before the newest)
+  Eigen::MatrixXd retired_;  // kSumCount x P: the part of sums_ from trucks out of the window
+  Eigen::Index total_trucks_ = 0;
+  std::deque<double> pool_speed_mps_, pool_sprung_mass_kg_;
   Eigen::ArrayXd proposed_ssr_;       // SSR at the last proposals of the newest truck's block
   int older_sweeps_done_ = 0;         // in the current stage
   std::vector<double> older_scale_;   // per older truck: adapted proposal multiplier

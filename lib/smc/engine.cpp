@@ -164,6 +164,8 @@ StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view l
   summary.log_evidence = log_evidence_;
   ++stages_run_;
   summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  // The history is a report of recent stages; an unbounded stream must not grow it forever.
+  if (history_.size() >= kHistoryLimit) history_.erase(history_.begin());
   history_.push_back(summary);
   return summary;
 }

@@ -102,7 +102,9 @@ class TemperedSampler {
   const Eigen::ArrayXd& log_weights() const { return log_weights_; }  // normalised: log W_i
   Eigen::ArrayXd weights() const;                                     // W_i, sum 1
   double ess() const;
+  // The last kHistoryLimit stages (all of them in an offline replay of up to that many records).
   const std::vector<StageSummary>& history() const { return history_; }
+  static constexpr std::size_t kHistoryLimit = 1000;
 
   // What a checkpoint must keep to continue bit-identically: every random stream is keyed by
   // the stage count, so with the model's particles restored the next stage is the same as in an
