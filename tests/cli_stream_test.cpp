@@ -209,3 +209,39 @@ TEST_CASE("predict reading the state of a running stream always gets a valid pos
   CHECK(bad_reads == 0);
   CHECK(last == 40);
 }
+
+TEST_CASE("a following stream picks up records appended to its input and stops cleanly on SIGTERM",
+          "[cli][stream]") {
+  test::TempDir dir;
+  const std::string full = dir.file("full.csv"), live = dir.file("live.csv"), state = dir.file("state");
+  REQUIRE(run_ssrfleet("simulate --trucks 6 --seed 5 --quiet --out " + q(full), dir).status == 0);
+  std::vector<std::string> lines;
+  {
+    std::ifstream in(full);
+    for (std::string l; std::getline(in, l);) lines.push_back(l);
+  }
+  REQUIRE(lines.size() == 8);  // comment, header, 6 trucks
+  {
+    std::ofstream out(live);
+    for (int i = 0; i < 4; ++i) out << lines[static_cast<std::size_t>(i)] << "\n";
+    out << lines[4].substr(0, 20);  // a record still being written
+  }
+  const pid_t pid = spawn_ssrfleet({"stream", "--state", state, "--input", live, "--follow", "--particles", "64",
+                                    "--seed", "3", "--quiet"});
+  const auto wait_trucks = [&](long n) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (trucks_in(state) < n && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return trucks_in(state);
+  };
+  CHECK(wait_trucks(2) == 2);
+  {
+    std::ofstream out(live, std::ios::app);
+    out << lines[4].substr(20) << "\n" << lines[5] << "\n" << lines[6] << "\n" << lines[7] << "\n";
+  }
+  CHECK(wait_trucks(6) == 6);
+  kill(pid, SIGTERM);
+  CHECK(wait_for(pid) == 0);
+  CHECK(test::read_text(state + "/rejects.csv").find("# line") == std::string::npos);  // the split record was whole
+}
