@@ -34,6 +34,7 @@ struct SiteComparison {     // Fig. 9: prediction from the AS1 fit vs a new flee
   std::string road;
   double max_abs_mean_diff = 0.0;   // largest |predicted mean - true mean| over sensors
   int max_mean_sensor = 0;          // 1-based
+  double max_abs_population_diff = 0.0;  // largest |predicted mean - Table 1 population mean|
   double max_abs_limit_diff = 0.0;  // largest |predicted limit - empirical limit| over sensors, both limits
   double coverage = 0.0;            // share of the new fleet's observed IFs inside the predicted limits
 };
