@@ -7,6 +7,7 @@
 #include <Eigen/Cholesky>
 #include <string>
 
+#include "fleet/extended_forward.hpp"
 #include "fleet/truncated_samplers.hpp"
 #include "smc/mh_kernel.hpp"
 #include "smc/rng.hpp"
@@ -42,7 +43,12 @@ FleetTarget::FleetTarget(const site::Site& site, Options options)
   }
   if (options_.older_sweeps < 0) throw UsageError("fleet target: older_sweeps must be >= 0");
   if (options_.window < 0) throw UsageError("fleet target: window must be >= 0");
+  if (options_.extension != nullptr && options_.window > 0) {
+    throw UsageError("fleet target: a model extension needs the exact regime (window 0)");
+  }
+  if (options_.extension_sweeps < 0) throw UsageError("fleet target: extension_sweeps must be >= 0");
   theta_.resize(kHyperCount, options_.particles);
+  psi_.resize(options_.extension != nullptr ? options_.extension->dim() : 0, options_.particles);
   sums_ = Eigen::MatrixXd::Zero(kSumCount, options_.particles);
   retired_ = Eigen::MatrixXd::Zero(kSumCount, options_.particles);
 }
@@ -58,7 +64,15 @@ void FleetTarget::initialise(const smc::RngFactory& rngs) {
   for (Eigen::Index i = 0; i < options_.particles; ++i) {
     smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
     for (int j = 0; j < kHyperCount; ++j) theta_(j, i) = prior.lo[j] + (prior.hi[j] - prior.lo[j]) * smc::uniform01(rng);
+    if (options_.extension != nullptr) {
+      const auto& ps = options_.extension->parameters();
+      for (Eigen::Index j = 0; j < psi_.rows(); ++j) {
+        const auto& p = ps[static_cast<std::size_t>(j)];
+        psi_(j, i) = p.lo + (p.hi - p.lo) * smc::uniform01(rng);
+      }
+    }
   }
+  extension_scale_ = 1.0;
   latents_.resize(0, options_.particles);
   ssr_.resize(0, options_.particles);
   sums_.setZero();
@@ -111,6 +125,7 @@ void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& 
   // The previous newest truck is an older one now: fold it into the running sums.
   for (Eigen::Index i = 0; i < P; ++i) recompute_sums(i);
   older_sweeps_done_ = 0;
+  extension_sweeps_done_ = 0;
 }
 
 void FleetTarget::retire_oldest_kept_truck() {
@@ -182,6 +197,23 @@ void FleetTarget::simulate_ssr(const std::vector<SsrJob>& jobs) const {
     else *job.ssr_out = kInf;
   }
   if (physical.empty()) return;
+  if (options_.extension != nullptr) {
+    std::vector<ExtendedPass> passes;
+    passes.reserve(physical.size());
+    for (const SsrJob* job : physical) {
+      const auto truck = static_cast<std::size_t>(job->truck);
+      passes.push_back({base_pass(site_, speed_mps_[truck], sprung_mass_kg_[truck], job->latents[kStiffness],
+                                  job->latents[kTyreStiffness], job->latents[kLateral]),
+                        job->psi});
+    }
+    Eigen::ArrayXXd model_if(sensors_, static_cast<Eigen::Index>(passes.size()));
+    simulate_passes(site_, options_.extension, passes, model_if);
+    for (std::size_t q = 0; q < physical.size(); ++q) {
+      const auto& y = observed_if_[static_cast<std::size_t>(physical[q]->truck)];
+      *physical[q]->ssr_out = (model_if.col(static_cast<Eigen::Index>(q)) - y.array()).square().sum();
+    }
+    return;
+  }
   site::TruckBatch batch;
   batch.resize(static_cast<Eigen::Index>(physical.size()));
   for (std::size_t q = 0; q < physical.size(); ++q) {
@@ -205,7 +237,7 @@ void FleetTarget::residuals(Eigen::Index truck, const Eigen::Ref<const Eigen::Ma
                             Eigen::Ref<Eigen::ArrayXd> ssr_out, const smc::ParallelFor& parallel) {
   parallel(latents.cols(), [&](Eigen::Index begin, Eigen::Index end) {
     std::vector<SsrJob> jobs;
-    for (Eigen::Index i = begin; i < end; ++i) jobs.push_back({truck, latents.col(i).data(), &ssr_out[i]});
+    for (Eigen::Index i = begin; i < end; ++i) jobs.push_back({truck, latents.col(i).data(), &ssr_out[i], psi_.col(i).data()});
     simulate_ssr(jobs);
   });
   passes_ += latents.cols();
@@ -254,6 +286,7 @@ void FleetTarget::accept(int /*block*/, const std::vector<char>& accepted,
 
 void FleetTarget::resample(const std::vector<Eigen::Index>& ancestors) {
   theta_ = theta_(Eigen::all, ancestors).eval();
+  psi_ = psi_(Eigen::all, ancestors).eval();
   latents_ = latents_(Eigen::all, ancestors).eval();
   ssr_ = ssr_(Eigen::all, ancestors).eval();
   sums_ = sums_(Eigen::all, ancestors).eval();
@@ -269,6 +302,10 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
     // σ_k and σ_kt need (a random walk alone left them 0.4 posterior sd off a long MCMC).
     older_trucks_sweep(rngs.child(1), parallel, older_sweeps_done_ % 2 == 1);
     ++older_sweeps_done_;
+  }
+  if (phi == 1.0 && options_.extension != nullptr && extension_sweeps_done_ < options_.extension_sweeps) {
+    extension_sweep(rngs.child(2), parallel);
+    ++extension_sweeps_done_;
   }
   const Eigen::Index newest = kept_trucks() - 1;
   const double n_all = static_cast<double>(trucks());  // the newest truck's latents are in γ in full
@@ -349,6 +386,10 @@ void FleetTarget::save(io::BinaryWriter& out) const {
   out.matrix(ssr_);
   out.value<std::uint64_t>(older_scale_.size());
   for (double v : older_scale_) out.value(v);
+  if (psi_.rows() > 0) {  // only with an extension, so checkpoints without one keep their format
+    out.matrix(psi_);
+    out.value(extension_scale_);
+  }
 }
 
 void FleetTarget::load(io::BinaryReader& in) {
@@ -384,7 +425,12 @@ void FleetTarget::load(io::BinaryReader& in) {
   if (scales != static_cast<std::uint64_t>(n > 0 ? n - 1 : 0)) in.fail("older_scale", "size does not match the trucks");
   older_scale_.assign(scales, 1.0);
   for (auto& v : older_scale_) v = in.value<double>("older_scale");
+  if (psi_.rows() > 0) {
+    psi_ = in.matrix("psi", psi_.rows(), P);
+    extension_scale_ = in.value<double>("extension_scale");
+  }
   older_sweeps_done_ = 0;
+  extension_sweeps_done_ = 0;
   for (Eigen::Index i = 0; i < P; ++i) recompute_sums(i);
 }
 
@@ -432,7 +478,9 @@ void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::Par
   parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
     std::vector<SsrJob> jobs;
     for (Eigen::Index i = begin; i < end; ++i) {
-      for (Eigen::Index j = 0; j < older; ++j) jobs.push_back({j, proposals.col(i).data() + 3 * j, &new_ssr(j, i)});
+      for (Eigen::Index j = 0; j < older; ++j) {
+        jobs.push_back({j, proposals.col(i).data() + 3 * j, &new_ssr(j, i), psi_.col(i).data()});
+      }
     }
     simulate_ssr(jobs);
   });
@@ -476,6 +524,68 @@ void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::Par
     total += rate;
   }
   older_acceptance_ = total / static_cast<double>(older);
+}
+
+}  // namespace ssrfleet::fleet
+
+namespace ssrfleet::fleet {
+
+void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel) {
+  const Eigen::Index P = options_.particles, n = kept_trucks(), d = psi_.rows();
+  const ModelExtension& ext = *options_.extension;
+  // Proposal: the cloud's spread of ψ (equal weights), 2.38/√d, times a multiplier adapted on
+  // acceptance; a ridge of 1e-4 of each prior width keeps a collapsed coordinate movable.
+  const Eigen::VectorXd mean = psi_.rowwise().mean();
+  const Eigen::MatrixXd centred = psi_.colwise() - mean;
+  Eigen::MatrixXd cov = centred * centred.transpose() / static_cast<double>(P);
+  for (Eigen::Index j = 0; j < d; ++j) {
+    const auto& p = ext.parameters()[static_cast<std::size_t>(j)];
+    cov(j, j) += std::pow(1e-4 * (p.hi - p.lo), 2);
+  }
+  Eigen::MatrixXd chol = Eigen::LLT<Eigen::MatrixXd>(cov).matrixL();
+  chol *= extension_scale_ * 2.38 / std::sqrt(static_cast<double>(d));
+  Eigen::MatrixXd proposals(d, P);
+  Eigen::ArrayXd log_u(P);
+  std::vector<char> inside(static_cast<std::size_t>(P), 0);
+  for (Eigen::Index i = 0; i < P; ++i) {
+    smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+    Eigen::VectorXd z(d);
+    for (Eigen::Index j = 0; j < d; ++j) z[j] = standard_normal(rng);
+    proposals.col(i) = psi_.col(i) + chol * z;
+    log_u[i] = std::log(uniform_open01(rng));
+    inside[static_cast<std::size_t>(i)] = ext.in_prior(proposals.col(i).data()) ? 1 : 0;
+  }
+  // Every kept truck of every particle whose proposal is inside the prior, at the proposal.
+  Eigen::MatrixXd new_ssr = Eigen::MatrixXd::Constant(n, P, kInf);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    std::vector<SsrJob> jobs;
+    for (Eigen::Index i = begin; i < end; ++i) {
+      if (!inside[static_cast<std::size_t>(i)]) continue;
+      for (Eigen::Index j = 0; j < n; ++j) {
+        jobs.push_back({j, latents_.col(i).data() + 3 * j, &new_ssr(j, i), proposals.col(i).data()});
+      }
+    }
+    simulate_ssr(jobs);
+  });
+  passes_ += n * static_cast<long long>(std::count(inside.begin(), inside.end(), 1));
+  Eigen::Index moved = 0;
+  for (Eigen::Index i = 0; i < P; ++i) {
+    if (!inside[static_cast<std::size_t>(i)]) continue;
+    // Uniform prior: inside the box, the ratio is the likelihood ratio over every kept truck
+    // (the newest included, at φ = 1).
+    const double s_new = new_ssr.col(i).sum(), s_old = ssr_.col(i).sum();
+    if (!std::isfinite(s_new)) continue;
+    const double sigma = theta_(kSigmaIf, i);
+    const double log_ratio = (s_old - s_new) / (2.0 * sigma * sigma);
+    if (log_u[i] < log_ratio) {
+      psi_.col(i) = proposals.col(i);
+      ssr_.col(i) = new_ssr.col(i);
+      recompute_sums(i);
+      ++moved;
+    }
+  }
+  extension_acceptance_ = static_cast<double>(moved) / static_cast<double>(P);
+  extension_scale_ = smc::tuned_scale_factor(extension_scale_, extension_acceptance_);
 }
 
 }  // namespace ssrfleet::fleet

@@ -25,6 +25,7 @@
 #include <Eigen/Core>
 
 #include "fleet/fleet_model.hpp"
+#include "fleet/model_extension.hpp"
 #include "io/binary_io.hpp"
 #include "io/wim_log.hpp"
 #include "site/site.hpp"
@@ -43,6 +44,13 @@ class FleetTarget final : public smc::TemperedModel {
     // (Σk, Σk², Σk_t, Σk_t², Σz, Σz², ΣSSR) and its latents are frozen from then on. 0 = exact
     // (every truck's latents kept and moved, memory growing with the stream).
     Eigen::Index window = 0;
+    // An optional model extension (DESIGN.md §6): its parameters ψ join θ in every particle,
+    // drawn from their prior before the first truck, and move once the new truck is fully in by
+    // `extension_sweeps` random-walk MH sweeps per stage, each re-simulating every kept truck
+    // (n passes per particle). Needs the exact regime (window 0): a retired truck's residuals
+    // cannot be recomputed at a new ψ. Not owned; must outlive the target.
+    const ModelExtension* extension = nullptr;
+    int extension_sweeps = 2;
   };
 
   FleetTarget(const site::Site& site, Options options);
@@ -56,6 +64,12 @@ class FleetTarget final : public smc::TemperedModel {
   Eigen::Index trucks() const { return total_trucks_; }              // absorbed so far
   Eigen::Index kept_trucks() const { return static_cast<Eigen::Index>(speed_mps_.size()); }  // with latents
   const Eigen::MatrixXd& theta() const { return theta_; }  // 7 x P
+  const Eigen::MatrixXd& psi() const { return psi_; }      // extension parameters: dim x P (0 rows without one)
+  const ModelExtension* extension() const { return options_.extension; }
+  // The data of the kept trucks (all of them in the exact regime), oldest first.
+  const std::vector<double>& kept_speed_mps() const { return speed_mps_; }
+  const std::vector<double>& kept_sprung_mass_kg() const { return sprung_mass_kg_; }
+  const std::vector<Eigen::VectorXd>& kept_observed_if() const { return observed_if_; }
   // Latents of kept truck j (0 = the oldest kept) for every particle: 3 x P (k, k_t, z).
   Eigen::MatrixXd truck_latents(Eigen::Index truck) const;
   const Eigen::MatrixXd& sums_of_squared_residuals() const { return ssr_; }  // trucks x P
@@ -67,6 +81,7 @@ class FleetTarget final : public smc::TemperedModel {
   static constexpr std::size_t kPredictionPool = 10000;
   long long integrator_passes() const { return passes_; }
   double older_acceptance() const { return older_acceptance_; }
+  double extension_acceptance() const { return extension_acceptance_; }
 
   // Checkpoint: the particles and the data absorbed, exactly (binary_io.hpp). load() expects a
   // target built with the same site and options; DataError if the saved one does not fit.
@@ -104,6 +119,7 @@ class FleetTarget final : public smc::TemperedModel {
     Eigen::Index truck;
     const double* latents;
     double* ssr_out;
+    const double* psi = nullptr;  // the particle's extension parameters (with an extension)
   };
   // Runs the jobs through one batched integrator call (serial: callers split the work).
   // Non-physical latents (k or k_t <= 0, z off the road) get an infinite SSR, unsimulated.
@@ -115,6 +131,8 @@ class FleetTarget final : public smc::TemperedModel {
   // One MH sweep over every older truck's latents of every particle, at φ = 1: a random walk on
   // (k, k_t, z), or (stiffness_from_prior) an independence proposal of (k, k_t) from p(· | θ).
   void older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel, bool stiffness_from_prior);
+  // One random-walk MH sweep over ψ of every particle at φ = 1 (every kept truck re-simulated).
+  void extension_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
 
   const site::Site& site_;
   Options options_;
@@ -127,6 +145,7 @@ class FleetTarget final : public smc::TemperedModel {
   std::vector<Eigen::VectorXd> observed_if_;
   // Particle states.
   Eigen::MatrixXd theta_;    // 7 x P
+  Eigen::MatrixXd psi_;      // extension parameters, dim x P
   Eigen::MatrixXd latents_;  // 3n x P: rows 3j..3j+2 = (k, k_t, z) of truck j
   Eigen::MatrixXd ssr_;      // n x P: sum of squared residuals of truck j
   Eigen::MatrixXd sums_;     // kSumCount x P (trucks before the newest)
@@ -137,6 +156,9 @@ class FleetTarget final : public smc::TemperedModel {
   int older_sweeps_done_ = 0;         // in the current stage
   std::vector<double> older_scale_;   // per older truck: adapted proposal multiplier
   double older_acceptance_ = 0.0;     // of the last older-trucks sweep
+  int extension_sweeps_done_ = 0;     // in the current stage
+  double extension_scale_ = 1.0;      // adapted proposal multiplier of the ψ random walk
+  double extension_acceptance_ = 0.0; // of the last ψ sweep
   long long passes_ = 0;
 };
 

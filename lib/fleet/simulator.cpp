@@ -7,6 +7,7 @@
 #include <boost/random/mersenne_twister.hpp>
 #include <boost/random/normal_distribution.hpp>
 
+#include "fleet/extended_forward.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::fleet {
@@ -25,8 +26,8 @@ site::TruckBatch to_batch(const std::vector<Truck>& trucks) {
   return b;
 }
 
-SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd,
-                          std::uint64_t seed) {
+namespace {
+void check_trucks(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd) {
   if (!(std::isfinite(noise_sd) && noise_sd >= 0.0)) {
     throw UsageError("simulate: noise sd is " + std::to_string(noise_sd) + ", but must be non-negative");
   }
@@ -37,27 +38,56 @@ SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& truc
                        std::to_string(site.lateral_max_m()) + "] m");
     }
   }
-  SimulatedLog log;
-  const auto n = static_cast<Eigen::Index>(trucks.size());
-  log.model_if.resize(site.sensors(), n);
-  site.impact_factors(to_batch(trucks), log.model_if, &log.min_if);
-  log.lift_offs = static_cast<int>((log.min_if < 0.0).count());
+}
 
-  // A stream of its own, so adding noise never changes which fleet a seed draws.
+// Records from the model output plus noise; the noise has a stream of its own, so adding it
+// never changes which fleet a seed draws.
+void add_records(SimulatedLog& log, const std::vector<Truck>& trucks, double noise_sd, std::uint64_t seed) {
+  log.lift_offs = static_cast<int>((log.min_if < 0.0).count());
   boost::random::mt19937_64 engine(seed ^ 0x6e6f697365ULL /* "noise" */);
   boost::random::normal_distribution<double> noise(0.0, 1.0);
   log.records.reserve(trucks.size());
-  for (Eigen::Index i = 0; i < n; ++i) {
+  for (std::size_t t = 0; t < trucks.size(); ++t) {
+    const auto i = static_cast<Eigen::Index>(t);
     io::WimRecord r;
-    r.truck_id = trucks[static_cast<std::size_t>(i)].truck_id;
-    r.speed_mps = trucks[static_cast<std::size_t>(i)].speed_mps;
-    r.sprung_mass_kg = trucks[static_cast<std::size_t>(i)].sprung_mass_kg;
+    r.truck_id = trucks[t].truck_id;
+    r.speed_mps = trucks[t].speed_mps;
+    r.sprung_mass_kg = trucks[t].sprung_mass_kg;
     r.impact_factor = log.model_if.col(i).matrix();
     if (noise_sd > 0.0) {
       for (Eigen::Index m = 0; m < r.impact_factor.size(); ++m) r.impact_factor[m] += noise_sd * noise(engine);
     }
     log.records.push_back(std::move(r));
   }
+}
+}  // namespace
+
+SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd,
+                          std::uint64_t seed) {
+  check_trucks(site, trucks, noise_sd);
+  SimulatedLog log;
+  log.model_if.resize(site.sensors(), static_cast<Eigen::Index>(trucks.size()));
+  site.impact_factors(to_batch(trucks), log.model_if, &log.min_if);
+  add_records(log, trucks, noise_sd, seed);
+  return log;
+}
+
+SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd,
+                          std::uint64_t seed, const ModelExtension& extension, const std::vector<double>& psi) {
+  check_trucks(site, trucks, noise_sd);
+  if (static_cast<Eigen::Index>(psi.size()) != extension.dim() || !extension.in_prior(psi.data())) {
+    throw UsageError("simulate: parameters of effect '" + extension.name() + "' are missing or outside their range");
+  }
+  std::vector<ExtendedPass> passes;
+  passes.reserve(trucks.size());
+  for (const auto& t : trucks) {
+    passes.push_back({base_pass(site, t.speed_mps, t.sprung_mass_kg, t.stiffness_npm, t.tyre_stiffness_npm, t.lateral_m),
+                      psi.data()});
+  }
+  SimulatedLog log;
+  log.model_if.resize(site.sensors(), static_cast<Eigen::Index>(trucks.size()));
+  simulate_passes(site, &extension, passes, log.model_if, &log.min_if);
+  add_records(log, trucks, noise_sd, seed);
   return log;
 }
 

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include "fleet/model_extension.hpp"
 #include "fleet/truck.hpp"
 #include "io/wim_log.hpp"
 #include "site/site.hpp"
@@ -24,6 +25,12 @@ struct SimulatedLog {
 // independent of the stream that draws a fleet from the same seed.
 SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd,
                           std::uint64_t seed);
+
+// The same with a model extension switched on at parameters psi (model_extension.hpp): data in
+// which the effect is present. A truck's speed is the one the WIM system logs (with speed_bias
+// the car really drove at another). min_if leaves out an added profile's own effect.
+SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd,
+                          std::uint64_t seed, const ModelExtension& extension, const std::vector<double>& psi);
 
 site::TruckBatch to_batch(const std::vector<Truck>& trucks);
 

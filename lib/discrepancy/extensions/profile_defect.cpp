@@ -1,0 +1,53 @@
+// profile_defect: a local bump (height > 0) or dip (< 0) across the whole lane that the road
+// file does not have (a patch, a joint, settlement over a culvert). Its shape is a raised
+// cosine of the given length centred at `position`, smoothed by the site's tyre envelopment like
+// the rest of the road. Its position may be anywhere from 20 m before the first sensor to the
+// last sensor: a defect after the last sensor cannot be seen.
+#include <algorithm>
+#include <cmath>
+
+#include "fleet/model_extension.hpp"
+#include "road/envelopment.hpp"
+
+namespace ssrfleet::fleet {
+namespace {
+
+class ProfileDefect final : public ModelExtension {
+ public:
+  explicit ProfileDefect(const site::Site& site) : envelopment_m_(site.options().envelopment_m) {
+    const auto& x = site.sensor_positions_m();
+    const double first = std::max(1.0, x.front() - 20.0);
+    params_ = {{"position", "m", first, x.back(), 0.5 * (first + x.back())},
+               {"length", "m", 0.1, 2.0, 0.5},
+               {"height", "m", -0.03, 0.03, 0.0}};
+  }
+  std::string name() const override { return "profile_defect"; }
+  std::string description() const override { return "a local bump or dip absent from the road file"; }
+  const std::vector<ExtensionParameter>& parameters() const override { return params_; }
+  std::vector<CheckKind> signature() const override {
+    return {CheckKind::kSensorMean, CheckKind::kSensorDispersion, CheckKind::kAutocorrelation};
+  }
+  bool adds_profile() const override { return true; }
+  void add_profile(const double* psi, double dx_m, Eigen::Ref<Eigen::ArrayXd> profile) const override {
+    const double centre = psi[0], length = psi[1], height = psi[2];
+    const Eigen::Index n = profile.size();
+    const double start = centre - 0.5 * length;
+    // Only the samples inside the defect (plus the envelopment's reach) are non-zero.
+    const auto first = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(start / dx_m)), 0, n - 1);
+    const auto last = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::ceil((start + length) / dx_m)), 0, n - 1);
+    for (Eigen::Index j = first; j <= last; ++j) {
+      const double u = (j * dx_m - start) / length;
+      if (u > 0.0 && u < 1.0) profile[j] += height * 0.5 * (1.0 - std::cos(2.0 * M_PI * u));
+    }
+    if (envelopment_m_ > 0.0) profile = road::envelop(Eigen::ArrayXd(profile), dx_m, envelopment_m_);
+  }
+
+ private:
+  double envelopment_m_;
+  std::vector<ExtensionParameter> params_;
+};
+
+const ExtensionRegistrar registrar("profile_defect", [](const site::Site& site) { return std::make_unique<ProfileDefect>(site); });
+
+}  // namespace
+}  // namespace ssrfleet::fleet

@@ -1,0 +1,110 @@
+// A named extension of the fleet model (DESIGN.md §6): one physical effect the base quarter-car
+// model leaves out, with its own parameters ψ and their uniform priors. The fleet target fits ψ
+// alongside θ and the trucks' latents (fleet_target.hpp); the simulator can switch the effect on
+// to make data in which it is hidden (simulator.hpp); `diagnose` scores each extension by
+// evidence (lib/discrepancy).
+//
+// An extension changes the forward model through up to three hooks, applied in this order to
+// every simulated pass:
+//   edit_pass    the pass's inputs (vehicle constants, the speed the car really drove at);
+//   add_profile  a height added to every wheel path (the same at every lateral position), e.g. a
+//                local defect missing from the road file; the system is linear, so its effect is
+//                simulated on its own and added (extended_forward.cpp);
+//   edit_output  what the sensors report (e.g. a calibration gain).
+// Each catalogue entry lives in one file under lib/discrepancy/extensions/ and registers itself
+// with ExtensionRegistrar, so adding an effect is one new file.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "site/site.hpp"
+
+namespace ssrfleet::fleet {
+
+// The posterior predictive checks of lib/discrepancy, by what they locate. An extension names the
+// checks its effect would fail (its signature), so `diagnose` refits only plausible candidates.
+enum class CheckKind : int {
+  kSensorMean = 0,   // per-sensor mean residual
+  kSensorDispersion, // per-sensor residual variance against σ_IF²
+  kSpeed,            // residuals against speed
+  kMass,             // residuals against sprung mass
+  kLateral,          // residuals against the lateral position
+  kAutocorrelation,  // lag-1 autocorrelation of residuals along the sensor array
+  kCount
+};
+inline constexpr std::string_view kCheckNames[] = {"sensor_mean",   "sensor_dispersion", "speed",
+                                                   "mass",          "lateral",           "autocorrelation"};
+inline std::string_view check_name(CheckKind c) { return kCheckNames[static_cast<int>(c)]; }
+
+struct ExtensionParameter {
+  std::string name;          // JSON key
+  std::string unit;          // for reports ("" = dimensionless)
+  double lo = 0.0, hi = 1.0; // uniform prior
+  double null_value = 0.0;   // the value at which the extension is the base model
+};
+
+// Everything one simulated pass depends on. The fleet model fills it from the record (speed,
+// sprung mass), the truck's latents (k, k_t, z) and the site's constants; extensions edit it.
+struct PassSetup {
+  double speed_mps = 0.0;
+  double sprung_mass_kg = 0.0;
+  double unsprung_mass_kg = 0.0;
+  double stiffness_npm = 0.0;
+  double suspension_damping_nspm = 0.0;
+  double tyre_stiffness_npm = 0.0;
+  double tyre_damping_nspm = 0.0;
+  double lateral_m = 0.0;
+};
+
+class ModelExtension {
+ public:
+  virtual ~ModelExtension() = default;
+
+  virtual std::string name() const = 0;         // canonical name (DESIGN.md §6)
+  virtual std::string description() const = 0;  // one line for reports
+  virtual const std::vector<ExtensionParameter>& parameters() const = 0;
+  virtual std::vector<CheckKind> signature() const = 0;
+
+  // psi points at parameters().size() values inside their prior box.
+  virtual void edit_pass(const double* /*psi*/, PassSetup& /*pass*/) const {}
+  virtual bool adds_profile() const { return false; }
+  // profile: the site's samples (spacing dx_m from x = 0), zero on entry; add the effect's
+  // height in metres, as the tyre feels it (after envelopment).
+  virtual void add_profile(const double* /*psi*/, double /*dx_m*/, Eigen::Ref<Eigen::ArrayXd> /*profile*/) const {}
+  // impact_factor: one pass's model IF at the site's sensors, edited in place.
+  virtual void edit_output(const double* /*psi*/, Eigen::Ref<Eigen::ArrayXd> /*impact_factor*/) const {}
+
+  Eigen::Index dim() const { return static_cast<Eigen::Index>(parameters().size()); }
+  bool in_prior(const double* psi) const;
+  // The uniform prior's log density (the normalised box), -inf outside.
+  double log_prior(const double* psi) const;
+};
+
+// The catalogue. A factory builds an extension for one site (priors may depend on the sensors and
+// the road's length).
+using ExtensionFactory = std::function<std::unique_ptr<ModelExtension>(const site::Site&)>;
+
+struct ExtensionRegistrar {
+  ExtensionRegistrar(std::string name, ExtensionFactory factory);
+};
+
+// Registered names, sorted.
+std::vector<std::string> extension_names();
+// UsageError listing the catalogue if the name is unknown.
+std::unique_ptr<ModelExtension> make_extension(const std::string& name, const site::Site& site);
+
+// "name:p1=v1,p2=v2" with every parameter of the extension given once, inside its prior box →
+// the extension and ψ (e.g. "sensor_gain:sensor=5,gain=1.05"). UsageError naming the bad part.
+struct ExtensionSetting {
+  std::unique_ptr<ModelExtension> extension;
+  std::vector<double> psi;
+};
+ExtensionSetting parse_extension_setting(const std::string& text, const site::Site& site);
+
+}  // namespace ssrfleet::fleet
