@@ -23,7 +23,7 @@ bool is_count(const std::string& s) {
 }  // namespace
 
 int run_simulate(int argc, const char* const argv[]) {
-  std::string road = "AS1", trucks_arg = "100", out = "-", truth, seed_text = "1";
+  std::string road = "AS1", trucks_arg = "100", out = "-", truth, seed_text = "1", effect;
   double noise = 0.02;
   bool quiet = false;
   SiteFlags site_flags;
@@ -38,6 +38,9 @@ int run_simulate(int argc, const char* const argv[]) {
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (fleet draw and noise)")
       ("out,o", po::value(&out)->default_value(out), "WIM log to write ('-' = standard output)")
       ("truth", po::value(&truth), "also write the simulated trucks (truck-list CSV) here")
+      ("effect", po::value(&effect),
+       "switch on an effect the base model leaves out, NAME:param=value,... (e.g. sensor_gain:sensor=5,gain=1.05; "
+       "see `ssrfleet diagnose --help` for the catalogue)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   site_flags.add_to(desc);
   po::options_description fleet_desc("fleet distribution (paper Table 1 defaults)");
@@ -70,12 +73,15 @@ int run_simulate(int argc, const char* const argv[]) {
   } else {
     trucks = io::read_truck_list_file(trucks_arg, site.lateral_min_m(), site.lateral_max_m());
   }
-  const fleet::SimulatedLog log = fleet::simulate_log(site, trucks, noise, seed);
+  fleet::ExtensionSetting setting;
+  if (!effect.empty()) setting = fleet::parse_extension_setting(effect, site);
+  const fleet::SimulatedLog log = setting.extension ? fleet::simulate_log(site, trucks, noise, seed, *setting.extension, setting.psi)
+                                                    : fleet::simulate_log(site, trucks, noise, seed);
 
   write_output(out, [&](std::ostream& os) {
     os << "# ssrfleet " << SSRFLEET_VERSION << " simulate: road " << site.surface().name << ", "
        << trucks.size() << " trucks, noise " << noise << ", seed " << seed << ", site " << site.fingerprint()
-       << "\n";
+       << (effect.empty() ? "" : ", effect ") << effect << "\n";
     io::write_wim_log(os, log.records);
   });
   if (!truth.empty()) write_output(truth, [&](std::ostream& os) { io::write_truck_list(os, trucks); });

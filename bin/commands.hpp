@@ -10,5 +10,6 @@ int run_fit(int argc, const char* const argv[]);
 int run_predict(int argc, const char* const argv[]);
 int run_stream(int argc, const char* const argv[]);
 int run_reproduce(int argc, const char* const argv[]);
+int run_diagnose(int argc, const char* const argv[]);
 
 }  // namespace ssrfleet::cli

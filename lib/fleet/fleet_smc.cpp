@@ -13,6 +13,8 @@ FleetTarget::Options target_options(const FleetSmc::Options& o) {
   t.prior = o.prior;
   t.older_sweeps = o.older_sweeps;
   t.window = o.window;
+  t.extension = o.extension;
+  t.extension_sweeps = o.extension_sweeps;
   return t;
 }
 

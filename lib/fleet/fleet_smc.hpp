@@ -34,6 +34,9 @@ class FleetSmc {
     int older_sweeps = 2;
     PriorBounds prior;
     Eigen::Index window = 0;  // FleetTarget::Options::window: 0 = exact, W = bounded memory
+    // FleetTarget::Options::extension: an effect fitted alongside θ (not owned; outlives this).
+    const ModelExtension* extension = nullptr;
+    int extension_sweeps = 2;
   };
 
   // UsageError on invalid options (the sampler's IsValid message).

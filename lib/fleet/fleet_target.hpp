@@ -72,6 +72,8 @@ class FleetTarget final : public smc::TemperedModel {
   const std::vector<Eigen::VectorXd>& kept_observed_if() const { return observed_if_; }
   // Latents of kept truck j (0 = the oldest kept) for every particle: 3 x P (k, k_t, z).
   Eigen::MatrixXd truck_latents(Eigen::Index truck) const;
+  // Every kept truck's latents: 3n x P, rows 3j..3j+2 = (k, k_t, z) of kept truck j.
+  const Eigen::MatrixXd& latents() const { return latents_; }
   const Eigen::MatrixXd& sums_of_squared_residuals() const { return ssr_; }  // trucks x P
   // Observed speeds and sprung masses for predictions: every truck, or in windowed mode the
   // last kPredictionPool of them (so memory stays flat).

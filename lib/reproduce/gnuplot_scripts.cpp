@@ -1,32 +1,11 @@
 #include "reproduce/gnuplot_scripts.hpp"
 
-#include <cstdlib>
-#include <filesystem>
 #include <sstream>
 
-#include <unistd.h>
 
 namespace ssrfleet::reproduce {
 
 namespace {
-
-// The same body rendered twice: PNG (pngcairo when present) and SVG.
-std::string both_terminals(const std::string& name, const std::string& body, int width = 900, int height = 600) {
-  std::ostringstream s;
-  s << "# " << name << ": written by ssrfleet reproduce; run `gnuplot " << name << ".gp` in this folder\n"
-    << "set datafile separator ','\n"
-    << "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
-    << "  set terminal pngcairo size " << width << "," << height << " enhanced font 'sans,11' dashed\n"
-    << "} else {\n"
-    << "  set terminal png size " << width << "," << height << "\n"
-    << "}\n"
-    << "set output '" << name << ".png'\n"
-    << body << "unset output\n"
-    << "set terminal svg size " << width << "," << height << " enhanced font 'sans,11' dynamic\n"
-    << "set output '" << name << ".svg'\n"
-    << body << "unset output\n";
-  return s.str();
-}
 
 const char* kStyles =
     "set style line 1 lc rgb '#1f4e9c' lw 2 dt 1\n"
@@ -38,14 +17,14 @@ const char* kStyles =
     "set key outside top center horizontal\n";
 
 std::string fig4() {
-  return both_terminals("fig4", std::string(kStyles) +
+  return io::png_and_svg_script("fig4", std::string(kStyles) +
       "set title \"Fig. 4: observed impact factors at the 16 sensors (AS1)\"\n"
       "set xlabel 'position along the road (m)'\nset ylabel 'impact factor (-)'\n"
       "plot 'fig4_observed.csv' skip 1 using 3:4 with points ls 5 title 'observed IF (each truck)'\n");
 }
 
 std::string fig6() {
-  return both_terminals("fig6", std::string(kStyles) +
+  return io::png_and_svg_script("fig6", std::string(kStyles) +
       "set title \"Fig. 6: fleet distribution of suspension stiffness k\"\n"
       "set xlabel 'suspension stiffness k (kN/m)'\nset ylabel 'probability density (1/(kN/m))'\n"
       "set style fill transparent solid 0.35 border lc rgb '#999999'\n"
@@ -59,7 +38,7 @@ std::string fig6() {
 }
 
 std::string fig7() {
-  return both_terminals("fig7", std::string(kStyles) +
+  return io::png_and_svg_script("fig7", std::string(kStyles) +
       "set title \"Fig. 7: observed IFs with the fitted model's mean and 95 % prediction limits (AS1)\"\n"
       "set xlabel 'position along the road (m)'\nset ylabel 'impact factor (-)'\n"
       "plot 'fig4_observed.csv' skip 1 using 3:4 with points ls 5 title 'observed IF', \\\n"
@@ -69,7 +48,7 @@ std::string fig7() {
 }
 
 std::string fig8() {
-  return both_terminals("fig8", std::string(kStyles) +
+  return io::png_and_svg_script("fig8", std::string(kStyles) +
       "set title \"Fig. 8: fit on sensors 1-10, prediction at sensors 11-16 (AS1)\"\n"
       "set xlabel 'position along the road (m)'\nset ylabel 'impact factor (-)'\n"
       "plot 'fig4_observed.csv' skip 1 using ($2 > 10 ? $3 : NaN):4 with points ls 5 title 'observed IF (not used in the fit)', \\\n"
@@ -80,7 +59,7 @@ std::string fig8() {
 }
 
 std::string fig9(const std::string& road, const std::string& file) {
-  return both_terminals(file, std::string(kStyles) +
+  return io::png_and_svg_script(file, std::string(kStyles) +
       "set title \"Fig. 9: " + road + ", new 100-truck fleet vs prediction from the AS1 fit\"\n"
       "set xlabel 'position along the road (m)'\nset ylabel 'impact factor (-)'\n"
       "plot '" + file + ".csv' skip 1 using 2:3 with linespoints ls 1 pt 5 ps 0.6 title 'predicted mean', \\\n"
@@ -101,7 +80,7 @@ std::string evolution() {
            "     '' skip 1 using 1:" + c(col + 2) + " with lines ls 2 notitle, \\\n" +
            "     '' skip 1 using 1:" + c(col + 3) + " with lines ls 3 title 'truth'\n";
   };
-  return both_terminals("evolution", std::string(kStyles) +
+  return io::png_and_svg_script("evolution", std::string(kStyles) +
       "set multiplot layout 3,1 title 'Posterior after each truck (SMC; the batch MCMC has no such history)'\n"
       "set xlabel 'trucks absorbed'\n" +
       panel("fleet mean suspension stiffness K", "K (kN/m)", 3, "/1e3") +
@@ -117,36 +96,6 @@ std::vector<PlotScript> plot_scripts() {
           {"fig7", fig7()},           {"fig8", fig8()},
           {"fig9_as2", fig9("AS2", "fig9_as2")}, {"fig9_as3", fig9("AS3", "fig9_as3")},
           {"evolution", evolution()}};
-}
-
-bool gnuplot_available() {
-  const char* path = std::getenv("PATH");
-  if (!path) return false;
-  std::stringstream ss(path);
-  std::string dir;
-  while (std::getline(ss, dir, ':')) {
-    if (dir.empty()) continue;
-    const auto candidate = std::filesystem::path(dir) / "gnuplot";
-    if (::access(candidate.c_str(), X_OK) == 0) return true;
-  }
-  return false;
-}
-
-std::vector<std::string> run_gnuplot(const std::string& dir, const std::vector<PlotScript>& scripts) {
-  std::vector<std::string> failed;
-  std::string quoted = "'";
-  for (char c : dir) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  quoted += "'";
-  for (const auto& s : scripts) {
-    const std::string cmd = "cd " + quoted + " && gnuplot " + s.name + ".gp >/dev/null 2>" + s.name + ".gnuplot.log";
-    if (std::system(cmd.c_str()) != 0) {
-      failed.push_back(s.name);
-    } else {
-      std::error_code ec;
-      std::filesystem::remove(std::filesystem::path(dir) / (s.name + ".gnuplot.log"), ec);
-    }
-  }
-  return failed;
 }
 
 }  // namespace ssrfleet::reproduce

@@ -6,20 +6,13 @@
 #include <string>
 #include <vector>
 
+#include "io/gnuplot_runner.hpp"
+
 namespace ssrfleet::reproduce {
 
-struct PlotScript {
-  std::string name;    // file stem: fig7 -> fig7.gp, fig7.png, fig7.svg
-  std::string script;  // the .gp text
-};
+using io::PlotScript;
 
 // The scripts for fig4, fig6 (k), fig7, fig8, fig9 (AS2, AS3) and the evolution.
 std::vector<PlotScript> plot_scripts();
-
-// True if an executable `gnuplot` is on PATH.
-bool gnuplot_available();
-
-// Runs `gnuplot NAME.gp` in `dir` for each script; returns the names that failed.
-std::vector<std::string> run_gnuplot(const std::string& dir, const std::vector<PlotScript>& scripts);
 
 }  // namespace ssrfleet::reproduce

@@ -389,9 +389,9 @@ Result run(const Options& o) {
   const auto scripts = plot_scripts();
   for (const auto& s : scripts) write(s.name + ".gp", [&](std::ostream& os) { os << s.script; });
   if (o.plots) {
-    if (gnuplot_available()) {
+    if (io::gnuplot_available()) {
       say("plotting with gnuplot (PNG and SVG)");
-      const auto failed = run_gnuplot(o.out_dir, scripts);
+      const auto failed = io::run_gnuplot(o.out_dir, scripts);
       for (const auto& f : failed) say("warning: gnuplot failed on " + f + ".gp (see " + f + ".gnuplot.log)");
       res.plotted = failed.size() < scripts.size();
       for (const auto& s : scripts) {

@@ -1,0 +1,96 @@
+// ssrfleet diagnose: where do the model and the measurements disagree, which physical effect is
+// missing, and how much does adding it close the gap (lib/discrepancy/diagnose.hpp).
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "discrepancy/diagnose.hpp"
+#include "discrepancy/diagnose_report.hpp"
+#include "fleet/model_extension.hpp"
+#include "io/wim_log.hpp"
+#include "site/road_source.hpp"
+#include "smc/engine.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::cli {
+
+int run_diagnose(int argc, const char* const argv[]) {
+  std::string log_path, road = "AS1", json_path, out_dir, seed_text = "1", candidates;
+  discrepancy::DiagnoseOptions o;
+  int threads = 0;
+  bool quiet = false, no_plots = false;
+  SiteFlags site_flags;
+  std::string catalogue;
+  for (const auto& name : fleet::extension_names()) {
+    if (!catalogue.empty()) catalogue += ",";
+    catalogue += name;
+  }
+  po::options_description desc("diagnose options");
+  desc.add_options()
+      ("help,h", "show this help")
+      ("log", po::value(&log_path)->required(), "WIM log (CSV) to diagnose")
+      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3 or a road CSV file")
+      ("json", po::value(&json_path), "write the JSON report here ('-' = standard output)")
+      ("out,o", po::value(&out_dir), "folder for the report, per-sensor CSVs and plots")
+      ("particles", po::value(&o.particles)->default_value(o.particles), "SMC particles per fit (>= 2)")
+      ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
+      ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
+      ("alpha", po::value(&o.alpha)->default_value(o.alpha), "a check fails when its predictive p-value is below this")
+      ("min-log-bf", po::value(&o.min_log_bayes_factor)->default_value(o.min_log_bayes_factor),
+       "log Bayes factor an effect needs against the base model")
+      ("holdout", po::value(&o.holdout_fraction)->default_value(o.holdout_fraction),
+       "share of the trucks (the last ones) that score held-out skill")
+      ("candidates", po::value(&candidates), ("extensions to consider, comma-separated (default: all of " + catalogue + ")").c_str())
+      ("refit-all", po::bool_switch(&o.refit_all), "refit every candidate, even those no failed check points at")
+      ("draws", po::value(&o.draws)->default_value(o.draws), "posterior draws behind the checks")
+      ("no-plots", po::bool_switch(&no_plots), "write the gnuplot scripts but do not run gnuplot")
+      ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
+  site_flags.add_to(desc);
+  po::positional_options_description positional;
+  positional.add("log", 1);
+  po::variables_map vm;
+  if (!parse_or_help(argc, argv, desc, &positional, vm,
+                     "usage: ssrfleet diagnose LOG [--road AS1|FILE] [--json report.json] [--out DIR] [--particles P]")) {
+    return 0;
+  }
+  o.seed = parse_seed(seed_text);
+  if (threads < 0) throw UsageError("--threads must be >= 0");
+  o.threads = threads > 0 ? threads : smc::TemperedSampler::Options::default_threads();
+  if (!candidates.empty()) {
+    std::stringstream ss(candidates);
+    std::string name;
+    while (std::getline(ss, name, ',')) {
+      if (!name.empty()) o.candidates.push_back(name);
+    }
+  }
+  o.validate();
+  const site::Site site(site::load_road(road), site_flags.to_options());
+  for (const auto& name : o.candidates) fleet::make_extension(name, site);  // unknown names fail before any work
+  int sensors = 0;
+  const auto records = io::read_wim_log_file(log_path, site.options().unsprung_mass_kg, &sensors);
+  if (sensors != site.sensors()) {
+    throw DataError(log_path, 1, "if_" + std::to_string(sensors),
+                    "the log has " + std::to_string(sensors) + " sensors but the site has " +
+                        std::to_string(site.sensors()) + " (--sensors " + site_flags.sensors + ")");
+  }
+  if (!quiet) o.progress = &std::cerr;
+  const auto result = discrepancy::diagnose(site, records, o);
+  if (!json_path.empty()) {
+    write_output(json_path, [&](std::ostream& os) { os << discrepancy::diagnosis_to_json(result).dump(1) << "\n"; });
+  }
+  if (!out_dir.empty()) {
+    bool plotted = false;
+    const auto files = discrepancy::write_diagnosis_files(out_dir, result, !no_plots, &plotted);
+    if (!quiet) {
+      std::cerr << "diagnose: wrote " << files.size() << " files to " << out_dir
+                << (plotted || no_plots ? "" : " (gnuplot not run: install gnuplot, then `gnuplot residual_pattern.gp` there)")
+                << "\n";
+    }
+  }
+  if (json_path != "-") discrepancy::print_diagnosis(std::cout, result);
+  return 0;
+}
+
+}  // namespace ssrfleet::cli

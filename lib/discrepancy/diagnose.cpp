@@ -1,0 +1,189 @@
+#include "discrepancy/diagnose.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <memory>
+#include <sstream>
+
+#include "discrepancy/posterior_draws.hpp"
+#include "fleet/fleet_smc.hpp"
+#include "fleet/model_extension.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::discrepancy {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// A fitted SMC together with the extension it points at (which must outlive it).
+struct Fitted {
+  std::unique_ptr<fleet::ModelExtension> extension;
+  std::unique_ptr<fleet::FleetSmc> smc;
+  ModelFit fit;
+};
+
+Fitted fit_model(const site::Site& site, const std::vector<io::WimRecord>& records, std::size_t heldout_from,
+                 std::unique_ptr<fleet::ModelExtension> extension, const DiagnoseOptions& o) {
+  Fitted f;
+  f.extension = std::move(extension);
+  fleet::FleetSmc::Options so;
+  so.sampler.particles = o.particles;
+  so.sampler.threads = o.threads;
+  so.sampler.seed = o.seed;
+  so.extension = f.extension.get();
+  f.smc = std::make_unique<fleet::FleetSmc>(site, so);
+  const std::string label = f.extension ? f.extension->name() : std::string("base model");
+  const auto start = Clock::now();
+  for (std::size_t t = 0; t < records.size(); ++t) {
+    const auto& stage = f.smc->absorb(records[t]);
+    if (t >= heldout_from) f.fit.heldout_log_score += stage.log_evidence_increment;
+    if (o.progress && ((t + 1) % 25 == 0 || t + 1 == records.size())) {
+      *o.progress << "diagnose: " << label << ": truck " << (t + 1) << "/" << records.size() << ", log evidence "
+                  << std::fixed << std::setprecision(1) << stage.log_evidence << ", " << seconds_since(start) << " s\n"
+                  << std::defaultfloat;
+    }
+  }
+  f.fit.log_evidence = f.smc->sampler().log_evidence();
+  f.fit.wall_s = seconds_since(start);
+  f.fit.integrator_passes = f.smc->target().integrator_passes();
+  const auto hyper = fleet::summarise_weighted(f.smc->target().theta(), f.smc->sampler().weights());
+  std::copy(hyper.begin(), hyper.end(), f.fit.hyper.begin());
+  return f;
+}
+
+std::vector<ParameterEstimate> extension_estimates(const Fitted& f) {
+  std::vector<ParameterEstimate> out;
+  const auto& params = f.extension->parameters();
+  const auto summary = fleet::summarise_weighted(f.smc->target().psi(), f.smc->sampler().weights());
+  for (std::size_t j = 0; j < params.size(); ++j) out.push_back({params[j].name, params[j].unit, params[j].null_value, summary[j]});
+  return out;
+}
+
+CheckReport check(const site::Site& site, const Fitted& f, const DiagnoseOptions& o) {
+  CheckOptions co;
+  co.alpha = o.alpha;
+  co.replicates = o.replicates;
+  co.seed = o.seed;
+  return run_checks(posterior_draws(site, *f.smc, o.draws, o.seed, o.threads), co);
+}
+
+std::vector<std::string> matched_checks(const fleet::ModelExtension& ext, const CheckReport& report) {
+  std::vector<std::string> matched;
+  for (const auto kind : ext.signature()) {
+    for (const auto& c : report.checks) {
+      if (c.kind == kind && c.flagged) matched.emplace_back(fleet::check_name(kind));
+    }
+  }
+  return matched;
+}
+
+std::string fmt(double v, int precision) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << v;
+  return s.str();
+}
+
+}  // namespace
+
+void DiagnoseOptions::validate() const {
+  if (particles < 2) throw UsageError("diagnose: particles must be at least 2");
+  if (threads < 1) throw UsageError("diagnose: threads must be at least 1");
+  if (!(alpha > 0.0 && alpha < 1.0)) throw UsageError("diagnose: alpha must be in (0, 1)");
+  if (!std::isfinite(min_log_bayes_factor)) throw UsageError("diagnose: the log Bayes factor threshold must be finite");
+  if (!(holdout_fraction > 0.0 && holdout_fraction < 1.0)) throw UsageError("diagnose: holdout fraction must be in (0, 1)");
+  if (draws < 10) throw UsageError("diagnose: draws must be at least 10");
+  if (replicates < 100) throw UsageError("diagnose: replicates must be at least 100");
+}
+
+DiagnoseResult diagnose(const site::Site& site, const std::vector<io::WimRecord>& records, const DiagnoseOptions& o) {
+  o.validate();
+  const auto start = Clock::now();
+  const std::size_t n = records.size();
+  if (n < 8) throw UsageError("diagnose: needs at least 8 trucks; the log has " + std::to_string(n));
+  DiagnoseResult r;
+  r.trucks = static_cast<int>(n);
+  r.heldout_trucks = std::max(1, static_cast<int>(std::lround(o.holdout_fraction * static_cast<double>(n))));
+  r.sensors = site.sensors();
+  r.sensor_positions_m = site.sensor_positions_m();
+  r.alpha = o.alpha;
+  r.min_log_bayes_factor = o.min_log_bayes_factor;
+  const std::size_t heldout_from = n - static_cast<std::size_t>(r.heldout_trucks);
+  const auto say = [&](const std::string& line) {
+    if (o.progress) *o.progress << "diagnose: " << line << "\n";
+  };
+
+  // Which extensions are candidates at all (checked before the long base fit).
+  std::vector<std::string> names = o.candidates.empty() ? fleet::extension_names() : o.candidates;
+  for (const auto& name : names) fleet::make_extension(name, site);  // UsageError on an unknown name
+
+  say("fitting the base model (" + std::to_string(o.particles) + " particles)");
+  Fitted base = fit_model(site, records, heldout_from, nullptr, o);
+  r.base = base.fit;
+  say("posterior predictive checks on the base model");
+  r.checks_before = check(site, base, o);
+  for (const auto& c : r.checks_before.checks) {
+    say("  " + std::string(fleet::check_name(c.kind)) + ": p = " + fmt(c.p_value, 4) + (c.flagged ? "  FAILED" : ""));
+  }
+
+  Fitted best;
+  for (const auto& name : names) {
+    auto ext = fleet::make_extension(name, site);
+    CandidateResult c;
+    c.name = name;
+    c.description = ext->description();
+    c.matched_checks = matched_checks(*ext, r.checks_before);
+    if (c.matched_checks.empty() && !o.refit_all) {
+      c.verdict = "not refitted: no failed check in its signature";
+      r.candidates.push_back(std::move(c));
+      continue;
+    }
+    say("refitting with " + name);
+    Fitted f = fit_model(site, records, heldout_from, std::move(ext), o);
+    c.refitted = true;
+    c.fit = f.fit;
+    c.log_bayes_factor = f.fit.log_evidence - base.fit.log_evidence;
+    c.heldout_gain = f.fit.heldout_log_score - base.fit.heldout_log_score;
+    c.parameters = extension_estimates(f);
+    say("  " + name + ": log Bayes factor " + fmt(c.log_bayes_factor, 1) + ", held-out gain " + fmt(c.heldout_gain, 1));
+    if (c.log_bayes_factor < o.min_log_bayes_factor) {
+      c.verdict = "log Bayes factor below " + fmt(o.min_log_bayes_factor, 1);
+    } else if (!(c.heldout_gain > 0.0)) {
+      c.verdict = "held-out skill not better than the base model's";
+    } else {
+      c.verdict = "supported";
+      if (!best.smc || c.log_bayes_factor > r.log_bayes_factor) {
+        best = std::move(f);
+        r.effect = name;
+        r.log_bayes_factor = c.log_bayes_factor;
+        r.heldout_gain = c.heldout_gain;
+      }
+    }
+    r.candidates.push_back(std::move(c));
+  }
+  for (auto& c : r.candidates) {
+    if (c.verdict == "supported") c.verdict = c.name == r.effect ? "chosen: largest log Bayes factor" : "supported, but " + r.effect + " has the larger log Bayes factor";
+  }
+
+  if (best.smc) {
+    r.description = best.extension->description();
+    r.parameters = extension_estimates(best);
+    r.chosen = best.fit;
+    say("posterior predictive checks with " + r.effect);
+    r.checks_after = check(site, best, o);
+  } else {
+    const bool any_failed = std::any_of(r.checks_before.checks.begin(), r.checks_before.checks.end(),
+                                        [](const CheckResult& c) { return c.flagged; });
+    r.description = any_failed ? "checks failed, but no extension in the catalogue is decisively better than the base model"
+                               : "every posterior predictive check passed: nothing is missing that these data can reveal";
+    r.chosen = r.base;
+    r.checks_after = r.checks_before;
+  }
+  r.wall_s = seconds_since(start);
+  return r;
+}
+
+}  // namespace ssrfleet::discrepancy

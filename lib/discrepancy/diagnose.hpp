@@ -1,0 +1,88 @@
+// The model-discrepancy workflow (DESIGN.md §6): fit the base model, run the posterior
+// predictive checks, shortlist the catalogue's extensions whose signature matches the failed
+// checks, refit with each by the same SMC, choose by log-evidence (the Bayes factor against the
+// base model) confirmed by held-out predictive skill, and measure the gap again with the chosen
+// effect in the model. "none" is an answer: when no check fails, or no candidate is decisively
+// better on both counts.
+//
+// Held-out skill: the SMC absorbs trucks in order, so the log-evidence increment of truck i is
+// log p(y_i | y_1..i-1), a prediction of data not yet fitted. The held-out score is the sum over
+// the last `holdout_fraction` of the trucks: how well each model, fitted on the trucks before,
+// predicts the ones after.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "discrepancy/posterior_checks.hpp"
+#include "fleet/fleet_model.hpp"
+#include "fleet/posterior_summary.hpp"
+#include "io/wim_log.hpp"
+#include "site/site.hpp"
+
+namespace ssrfleet::discrepancy {
+
+struct DiagnoseOptions {
+  int particles = 512;
+  int threads = 1;
+  std::uint64_t seed = 1;
+  double alpha = 0.01;              // a check fails when its predictive p-value is below this
+  double min_log_bayes_factor = 3.0;  // log BF an effect needs (3: "strong", Kass & Raftery 1995)
+  double holdout_fraction = 0.25;   // the last quarter of the trucks scores held-out skill
+  int draws = 200;                  // posterior draws behind the checks
+  int replicates = 4000;            // replicated data sets per check
+  std::vector<std::string> candidates;  // empty: the whole catalogue
+  bool refit_all = false;           // refit every candidate, whatever the checks say
+  std::ostream* progress = nullptr;
+
+  void validate() const;  // UsageError naming the option
+};
+
+struct ParameterEstimate {
+  std::string name, unit;
+  double null_value = 0.0;          // the base model's value
+  fleet::ParameterSummary posterior;
+};
+
+struct ModelFit {
+  double log_evidence = 0.0;
+  double heldout_log_score = 0.0;
+  double wall_s = 0.0;
+  long long integrator_passes = 0;
+  std::array<fleet::ParameterSummary, fleet::kHyperCount> hyper{};
+};
+
+struct CandidateResult {
+  std::string name, description;
+  std::vector<std::string> matched_checks;  // failed checks in its signature
+  bool refitted = false;
+  ModelFit fit;                                 // if refitted
+  double log_bayes_factor = std::numeric_limits<double>::quiet_NaN();  // vs the base model
+  double heldout_gain = std::numeric_limits<double>::quiet_NaN();      // held-out score minus the base's
+  std::vector<ParameterEstimate> parameters;
+  std::string verdict;  // why it was chosen or not
+};
+
+struct DiagnoseResult {
+  std::string effect = "none";
+  std::string description;                 // of the effect, or why none
+  std::vector<ParameterEstimate> parameters;  // of the chosen effect
+  double log_bayes_factor = 0.0;
+  double heldout_gain = 0.0;
+  int trucks = 0, heldout_trucks = 0, sensors = 0;
+  std::vector<double> sensor_positions_m;
+  ModelFit base;
+  CheckReport checks_before, checks_after;  // after = before when the effect is none
+  ModelFit chosen;                          // = base when none
+  std::vector<CandidateResult> candidates;
+  double alpha = 0.01, min_log_bayes_factor = 3.0;
+  double wall_s = 0.0;
+};
+
+// records: the WIM log, in arrival order; its sensor count must be the site's (DataError).
+DiagnoseResult diagnose(const site::Site& site, const std::vector<io::WimRecord>& records, const DiagnoseOptions& options);
+
+}  // namespace ssrfleet::discrepancy

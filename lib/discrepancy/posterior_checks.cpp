@@ -1,0 +1,323 @@
+#include "discrepancy/posterior_checks.hpp"
+
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <boost/random/mersenne_twister.hpp>
+#include <boost/random/normal_distribution.hpp>
+
+namespace ssrfleet::discrepancy {
+
+using Eigen::Index;
+using fleet::CheckKind;
+
+namespace {
+
+constexpr int kFamilies = static_cast<int>(CheckKind::kCount);
+// The families with a value per sensor come first in CheckKind; the autocorrelation, a property
+// of each truck's whole residual vector, is the only one without.
+constexpr int kPerSensorFamilies = static_cast<int>(CheckKind::kAutocorrelation);
+// The covariate families kSpeed, kMass, kLateral are consecutive.
+constexpr int kFirstCovariate = static_cast<int>(CheckKind::kSpeed);
+constexpr int kCovariates = 3;
+
+using FamilyValues = std::array<double, kFamilies>;
+
+constexpr int family(CheckKind kind) { return static_cast<int>(kind); }
+
+// ---- Input validation -------------------------------------------------------------------------
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("run_checks: " + what);
+}
+
+// "name[d]", built by appending: GCC 12 reports a false -Wrestrict on "[" + std::to_string(d).
+std::string indexed(const char* name, std::size_t d) {
+  std::string s(name);
+  s.append("[").append(std::to_string(d)).append("]");
+  return s;
+}
+
+std::string shape(const Eigen::MatrixXd& m) {
+  return std::to_string(m.rows()) + " x " + std::to_string(m.cols());
+}
+
+void validate(const PosteriorDraws& draws, const CheckOptions& options) {
+  require(options.replicates >= 1,
+          "replicates is " + std::to_string(options.replicates) + ", but must be >= 1");
+  require(options.alpha > 0.0 && options.alpha < 1.0,
+          "alpha is " + std::to_string(options.alpha) + ", but must lie in (0, 1)");
+
+  const Eigen::MatrixXd& y = draws.observed;
+  require(y.rows() >= 1, "observed has no sensors (rows)");
+  require(y.cols() >= 2,
+          "observed has " + std::to_string(y.cols()) + " trucks (columns), but the checks need >= 2");
+  require(y.allFinite(), "observed holds a value that is not finite");
+  const auto n = std::to_string(y.cols());
+  require(draws.speed_mps.size() == y.cols(), "speed_mps has " + std::to_string(draws.speed_mps.size()) +
+                                                  " entries, but observed has " + n + " trucks");
+  require(draws.sprung_mass_kg.size() == y.cols(), "sprung_mass_kg has " +
+                                                       std::to_string(draws.sprung_mass_kg.size()) +
+                                                       " entries, but observed has " + n + " trucks");
+
+  const std::size_t D = draws.model_if.size();
+  require(D >= 1, "model_if holds no posterior draws, but the checks need >= 1");
+  require(draws.lateral_m.size() == D, "lateral_m holds " + std::to_string(draws.lateral_m.size()) +
+                                           " draws, but model_if holds " + std::to_string(D));
+  require(draws.sigma_if.size() == D, "sigma_if holds " + std::to_string(draws.sigma_if.size()) +
+                                          " draws, but model_if holds " + std::to_string(D));
+  for (std::size_t d = 0; d < D; ++d) {
+    const Eigen::MatrixXd& f = draws.model_if[d];
+    require(f.rows() == y.rows() && f.cols() == y.cols(),
+            indexed("model_if", d) + " is " + shape(f) + ", but observed is " + shape(y));
+    require(f.allFinite(), indexed("model_if", d) + " holds a value that is not finite");
+    require(draws.lateral_m[d].size() == y.cols(), indexed("lateral_m", d) + " has " +
+                                                       std::to_string(draws.lateral_m[d].size()) +
+                                                       " entries, but observed has " + n + " trucks");
+    require(std::isfinite(draws.sigma_if[d]) && draws.sigma_if[d] > 0.0,
+            indexed("sigma_if", d) + " is " + std::to_string(draws.sigma_if[d]) + ", but must be positive");
+  }
+}
+
+// ---- The family statistics of one residual matrix ---------------------------------------------
+
+// A covariate across trucks, centred and scaled to unit length. A residual row's Pearson
+// correlation with the covariate is then the row's centred dot product with this direction over
+// the row's centred norm, so all three covariates cost one small matrix product. A constant
+// covariate has no direction: zeros make its correlations 0 (a vacuous check rather than NaN).
+Eigen::VectorXd unit_direction(const Eigen::VectorXd& x) {
+  Eigen::VectorXd u = x.array() - x.mean();
+  const double norm = u.norm();
+  return norm > 0.0 ? Eigen::VectorXd(u / norm) : Eigen::VectorXd::Zero(x.size());
+}
+
+// Evaluates every family's statistic T on a residual matrix (sensors x trucks), keeping the
+// per-sensor values behind it. It is run once per posterior draw on the observed residuals and
+// once per replicate, so it owns its workspace and allocates nothing per call.
+class ResidualStatistics {
+ public:
+  ResidualStatistics(const Eigen::VectorXd& speed_mps, const Eigen::VectorXd& sprung_mass_kg, Index sensors)
+      : per_sensor(sensors, kPerSensorFamilies),
+        directions_(speed_mps.size(), kCovariates),
+        sensor_centred_(sensors, speed_mps.size()),
+        truck_mean_(speed_mps.size()),
+        truck_centred_(sensors, speed_mps.size()),
+        sensor_ss_(sensors) {
+    directions_.col(0) = unit_direction(speed_mps);
+    directions_.col(1) = unit_direction(sprung_mass_kg);
+  }
+
+  // r: residuals; sigma: the draw's σ; lateral: unit_direction of the draw's lateral positions.
+  void evaluate(const Eigen::MatrixXd& r, double sigma, const Eigen::Ref<const Eigen::VectorXd>& lateral) {
+    const auto N = static_cast<double>(r.cols());
+    directions_.col(2) = lateral;
+
+    auto mean = per_sensor.col(family(CheckKind::kSensorMean));
+    auto dispersion = per_sensor.col(family(CheckKind::kSensorDispersion));
+    auto correlation = per_sensor.middleCols(kFirstCovariate, kCovariates);
+
+    row_mean.noalias() = r.rowwise().mean();
+    sensor_centred_ = r.colwise() - row_mean;
+    sensor_ss_ = sensor_centred_.rowwise().squaredNorm();
+
+    // Under the model mean_i r_im ~ N(0, σ²/N), so z_m is standard normal.
+    mean = row_mean * (std::sqrt(N) / sigma);
+    // Under the model N ρ_m ~ χ²_{N-1}: ρ_m ≈ 1 and a noisy sensor lifts it.
+    dispersion = sensor_ss_ / (N * sigma * sigma);
+    correlation.noalias() = sensor_centred_ * directions_;
+    for (Index m = 0; m < r.rows(); ++m) {
+      // A sensor whose residuals are all equal correlates with nothing.
+      const double norm = std::sqrt(sensor_ss_[m]);
+      if (norm > 0.0) {
+        correlation.row(m) /= norm;
+      } else {
+        correlation.row(m).setZero();
+      }
+    }
+
+    T[family(CheckKind::kSensorMean)] = mean.cwiseAbs().maxCoeff();
+    T[family(CheckKind::kSensorDispersion)] = dispersion.maxCoeff();
+    // Each c_m is about N(0, 1/N) under the model and the sensors' rows are independent, so
+    // N Σ_m c_m² is about χ²_M.
+    for (int k = 0; k < kCovariates; ++k) T[kFirstCovariate + k] = N * correlation.col(k).squaredNorm();
+    T[family(CheckKind::kAutocorrelation)] = autocorrelation_statistic(r);
+  }
+
+  FamilyValues T{};
+  Eigen::MatrixXd per_sensor;  // sensors x kPerSensorFamilies, columns in CheckKind order
+  Eigen::VectorXd row_mean;    // per sensor: mean_i r_im
+
+ private:
+  // |ā + 1/M| sqrt(N (M - 1)), ā the mean over trucks of the lag-1 autocorrelation of each
+  // truck's residuals along the array, centred on the truck's own mean. For white noise of any
+  // variance the centred vector's direction is uniform on the sphere orthogonal to 1 and
+  // independent of its length, so E[a_i] = tr(P A)/(M - 1) = -1/M exactly (P the centring
+  // projector, A the symmetrised lag-1 shift). Centring there makes the test two-sided about the
+  // model's value; the scale makes T about |N(0, 1)|.
+  double autocorrelation_statistic(const Eigen::MatrixXd& r) {
+    const Index M = r.rows(), N = r.cols();
+    if (M < 2) return 0.0;  // no neighbours: nothing to test
+    const double null_mean = -1.0 / static_cast<double>(M);
+    truck_mean_.noalias() = r.colwise().mean();
+    truck_centred_ = r.rowwise() - truck_mean_;
+    double sum = 0.0;
+    for (Index i = 0; i < N; ++i) {
+      const auto c = truck_centred_.col(i);
+      const double ss = c.squaredNorm();
+      // A flat residual vector carries no evidence either way: count it at the model's value.
+      sum += ss > 0.0 ? c.head(M - 1).dot(c.tail(M - 1)) / ss : null_mean;
+    }
+    const double mean_autocorrelation = sum / static_cast<double>(N);
+    return std::abs(mean_autocorrelation - null_mean) * std::sqrt(static_cast<double>(N * (M - 1)));
+  }
+
+  Eigen::MatrixXd directions_;      // trucks x 3: unit directions of speed, mass, lateral
+  Eigen::MatrixXd sensor_centred_;  // r with each sensor's mean over trucks removed
+  Eigen::RowVectorXd truck_mean_;   // per truck: mean_m r_im
+  Eigen::MatrixXd truck_centred_;   // r with each truck's mean over sensors removed
+  Eigen::VectorXd sensor_ss_;       // per sensor: Σ_i (r_im - r̄_m)²
+};
+
+// ---- Observed data, replicated data, and the gap measures -------------------------------------
+
+// The observed residuals under every draw: T_obs(d), and the posterior means of the values behind.
+struct ObservedStatistics {
+  std::vector<FamilyValues> T_by_draw;
+  Eigen::MatrixXd per_sensor_mean;  // sensors x kPerSensorFamilies
+  Eigen::VectorXd residual_mean;    // per sensor: posterior mean of mean_i r_im
+};
+
+ObservedStatistics evaluate_observed(const PosteriorDraws& draws, const Eigen::MatrixXd& lateral_directions,
+                                     ResidualStatistics& stats) {
+  const std::size_t D = draws.model_if.size();
+  ObservedStatistics out;
+  out.T_by_draw.resize(D);
+  out.per_sensor_mean = Eigen::MatrixXd::Zero(draws.observed.rows(), kPerSensorFamilies);
+  out.residual_mean = Eigen::VectorXd::Zero(draws.observed.rows());
+  Eigen::MatrixXd residual(draws.observed.rows(), draws.observed.cols());
+  for (std::size_t d = 0; d < D; ++d) {
+    residual = draws.observed - draws.model_if[d];
+    stats.evaluate(residual, draws.sigma_if[d], lateral_directions.col(static_cast<Index>(d)));
+    out.T_by_draw[d] = stats.T;
+    out.per_sensor_mean += stats.per_sensor;
+    out.residual_mean += stats.row_mean;
+  }
+  out.per_sensor_mean /= static_cast<double>(D);
+  out.residual_mean /= static_cast<double>(D);
+  return out;
+}
+
+// What the replicates add up to, per family.
+struct ReplicateTally {
+  std::array<int, kFamilies> at_least_observed{};  // #{T_rep >= T_obs}
+  FamilyValues observed_sum{}, replicated_sum{};
+};
+
+ReplicateTally replicate(const PosteriorDraws& draws, const Eigen::MatrixXd& lateral_directions,
+                         const ObservedStatistics& observed, const CheckOptions& options,
+                         ResidualStatistics& stats) {
+  const std::size_t D = draws.model_if.size();
+  boost::random::mt19937_64 engine(options.seed);
+  boost::random::normal_distribution<double> std_normal(0.0, 1.0);
+  Eigen::MatrixXd residual(draws.observed.rows(), draws.observed.cols());
+  ReplicateTally tally;
+  for (int r = 0; r < options.replicates; ++r) {
+    const std::size_t d = static_cast<std::size_t>(r) % D;
+    const double sigma = draws.sigma_if[d];
+    // y_rep - f_d = σ_d ε: draw the residual itself rather than form y_rep and subtract f_d
+    // again (equal in exact arithmetic, without f's rounding). Fixed order: reproducible.
+    for (Index i = 0; i < residual.cols(); ++i) {
+      for (Index m = 0; m < residual.rows(); ++m) residual(m, i) = sigma * std_normal(engine);
+    }
+    stats.evaluate(residual, sigma, lateral_directions.col(static_cast<Index>(d)));
+    const FamilyValues& T_obs = observed.T_by_draw[d];
+    for (int k = 0; k < kFamilies; ++k) {
+      tally.observed_sum[k] += T_obs[k];
+      tally.replicated_sum[k] += stats.T[k];
+      if (stats.T[k] >= T_obs[k]) ++tally.at_least_observed[k];
+    }
+  }
+  return tally;
+}
+
+std::vector<double> to_std_vector(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
+
+CheckResult make_result(CheckKind kind, const ObservedStatistics& observed, const ReplicateTally& tally,
+                        const CheckOptions& options) {
+  const int k = family(kind);
+  const auto R = static_cast<double>(options.replicates);
+  CheckResult out;
+  out.kind = kind;
+  out.statistic = tally.observed_sum[k] / R;
+  out.replicated = tally.replicated_sum[k] / R;
+  // Counting the observed data among the replicates keeps p > 0 and makes it a valid p-value
+  // for finite R (Davison & Hinkley 1997, §4.2).
+  out.p_value = (1.0 + tally.at_least_observed[k]) / (1.0 + R);
+  out.flagged = out.p_value < options.alpha;
+  if (k < kPerSensorFamilies) {
+    const Eigen::VectorXd values = observed.per_sensor_mean.col(k);
+    out.per_sensor = to_std_vector(values);
+    // Largest in magnitude: z_m and c_m are signed; ρ_m >= 0, so for it this is the plain largest.
+    Index worst = 0;
+    values.cwiseAbs().maxCoeff(&worst);
+    out.sensor = static_cast<int>(worst) + 1;
+  }
+  return out;
+}
+
+// The share of y_im inside the central 95 % interval of its posterior predictive distribution,
+// the mixture over draws of N(f_im(d), σ_d²): inside iff the mixture CDF at y_im lies in
+// [0.025, 0.975]. Exact for the draws given, with no sampling of the noise.
+double coverage95(const PosteriorDraws& draws) {
+  const Eigen::MatrixXd& y = draws.observed;
+  Eigen::MatrixXd cdf = Eigen::MatrixXd::Zero(y.rows(), y.cols());
+  for (std::size_t d = 0; d < draws.model_if.size(); ++d) {
+    const double scale = -1.0 / (std::sqrt(2.0) * draws.sigma_if[d]);
+    const Eigen::MatrixXd& f = draws.model_if[d];
+    for (Index i = 0; i < y.cols(); ++i) {
+      for (Index m = 0; m < y.rows(); ++m) cdf(m, i) += 0.5 * std::erfc((y(m, i) - f(m, i)) * scale);  // Φ
+    }
+  }
+  cdf /= static_cast<double>(draws.model_if.size());
+  const auto inside = (cdf.array() >= 0.025 && cdf.array() <= 0.975).count();
+  return static_cast<double>(inside) / static_cast<double>(cdf.size());
+}
+
+GapMeasures gap_measures(const PosteriorDraws& draws, const ObservedStatistics& observed) {
+  const double sigma_mean =
+      Eigen::Map<const Eigen::VectorXd>(draws.sigma_if.data(), static_cast<Index>(draws.sigma_if.size()))
+          .mean();
+  const Eigen::VectorXd standardised =
+      observed.residual_mean * (std::sqrt(static_cast<double>(draws.observed.cols())) / sigma_mean);
+  GapMeasures out;
+  out.mean_residual = to_std_vector(observed.residual_mean);
+  out.standardised_mean = to_std_vector(standardised);
+  out.rms_standardised_mean =
+      std::sqrt(standardised.squaredNorm() / static_cast<double>(standardised.size()));
+  out.coverage95 = coverage95(draws);
+  return out;
+}
+
+}  // namespace
+
+CheckReport run_checks(const PosteriorDraws& draws, const CheckOptions& options) {
+  validate(draws, options);
+  const auto D = static_cast<Index>(draws.model_if.size());
+  Eigen::MatrixXd lateral_directions(draws.observed.cols(), D);
+  for (Index d = 0; d < D; ++d)
+    lateral_directions.col(d) = unit_direction(draws.lateral_m[static_cast<std::size_t>(d)]);
+
+  ResidualStatistics stats(draws.speed_mps, draws.sprung_mass_kg, draws.observed.rows());
+  const ObservedStatistics observed = evaluate_observed(draws, lateral_directions, stats);
+  const ReplicateTally tally = replicate(draws, lateral_directions, observed, options, stats);
+
+  CheckReport report;
+  for (int k = 0; k < kFamilies; ++k)
+    report.checks.push_back(make_result(static_cast<CheckKind>(k), observed, tally, options));
+  report.gap = gap_measures(draws, observed);
+  return report;
+}
+
+}  // namespace ssrfleet::discrepancy
