@@ -43,7 +43,8 @@ int run_diagnose(int argc, const char* const argv[]) {
       ("holdout", po::value(&o.holdout_fraction)->default_value(o.holdout_fraction),
        "share of the trucks (the last ones) that score held-out skill")
       ("candidates", po::value(&candidates), ("extensions to consider, comma-separated (default: all of " + catalogue + ")").c_str())
-      ("refit-all", po::bool_switch(&o.refit_all), "refit every candidate, even those no failed check points at")
+      ("shortlist-only", po::bool_switch(&o.shortlist_only),
+       "refit only candidates that a failed check points at (faster; misses effects the checks cannot see)")
       ("draws", po::value(&o.draws)->default_value(o.draws), "posterior draws behind the checks")
       ("no-plots", po::bool_switch(&no_plots), "write the gnuplot scripts but do not run gnuplot")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");

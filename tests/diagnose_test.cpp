@@ -67,6 +67,7 @@ TEST_CASE("diagnose names a 6 % gain on sensor 9 of a 40-truck log and closes th
   const std::string setting = "sensor_gain:sensor=9,gain=1.06";
   auto o = options(256, 3);
   o.candidates = {"sensor_gain", "tyre_damping", "speed_bias"};
+  o.shortlist_only = true;
   const auto r = discrepancy::diagnose(as1(), hidden_effect_log(setting, 40, 3), o);
   require_found(r, setting);
   // The per-sensor check found where: sensor 9.
@@ -90,7 +91,6 @@ TEST_CASE("diagnose answers none on a 40-truck log with no effect", "[discrepanc
 TEST_CASE("the diagnose JSON has the fields of the issue's contract", "[discrepancy][diagnose]") {
   auto o = options(64, 1);
   o.candidates = {"sensor_gain"};
-  o.refit_all = true;
   o.draws = 20;
   o.replicates = 200;
   const auto r = discrepancy::diagnose(as1(), hidden_effect_log("sensor_gain:sensor=2,gain=1.1", 12, 1), o);

@@ -129,6 +129,11 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<io::WimRecord>
     say("  " + std::string(fleet::check_name(c.kind)) + ": p = " + fmt(c.p_value, 4) + (c.flagged ? "  FAILED" : ""));
   }
 
+  // The shortlist first (a stable order otherwise), so progress shows the likeliest first.
+  std::stable_sort(names.begin(), names.end(), [&](const std::string& a, const std::string& b) {
+    return !matched_checks(*fleet::make_extension(a, site), r.checks_before).empty() &&
+           matched_checks(*fleet::make_extension(b, site), r.checks_before).empty();
+  });
   Fitted best;
   for (const auto& name : names) {
     auto ext = fleet::make_extension(name, site);
@@ -136,7 +141,7 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<io::WimRecord>
     c.name = name;
     c.description = ext->description();
     c.matched_checks = matched_checks(*ext, r.checks_before);
-    if (c.matched_checks.empty() && !o.refit_all) {
+    if (c.matched_checks.empty() && o.shortlist_only) {
       c.verdict = "not refitted: no failed check in its signature";
       r.candidates.push_back(std::move(c));
       continue;
@@ -178,7 +183,8 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<io::WimRecord>
     const bool any_failed = std::any_of(r.checks_before.checks.begin(), r.checks_before.checks.end(),
                                         [](const CheckResult& c) { return c.flagged; });
     r.description = any_failed ? "checks failed, but no extension in the catalogue is decisively better than the base model"
-                               : "every posterior predictive check passed: nothing is missing that these data can reveal";
+                               : "every posterior predictive check passed and no extension in the catalogue is decisively "
+                                 "better than the base model: nothing is missing that these data can reveal";
     r.chosen = r.base;
     r.checks_after = r.checks_before;
   }
