@@ -30,6 +30,7 @@ nlohmann::json parameters_json(const std::vector<ParameterEstimate>& params) {
 
 nlohmann::json gap_json(const GapMeasures& g) {
   return {{"rms_standardised_mean_residual", g.rms_standardised_mean},
+          {"systematic_gap", g.systematic_gap},
           {"coverage95", g.coverage95},
           {"mean_residual", g.mean_residual},
           {"standardised_mean_residual", g.standardised_mean}};
@@ -106,6 +107,8 @@ void write_summary(std::ostream& os, const DiagnoseResult& r) {
   os << "| RMS standardised per-sensor mean residual (about 1 or less when the model fits) | "
      << fixed(r.checks_before.gap.rms_standardised_mean, 2) << " | " << fixed(r.checks_after.gap.rms_standardised_mean, 2)
      << " |\n";
+  os << "| systematic part of it, sqrt(max(0, RMS^2 - 1)) (about 0 when the model fits) | "
+     << fixed(r.checks_before.gap.systematic_gap, 2) << " | " << fixed(r.checks_after.gap.systematic_gap, 2) << " |\n";
   os << "| observed IFs inside their 95 % posterior predictive interval | " << fixed(100 * r.checks_before.gap.coverage95, 1)
      << " % | " << fixed(100 * r.checks_after.gap.coverage95, 1) << " % |\n\n";
   os << "## Posterior predictive checks\n\n";

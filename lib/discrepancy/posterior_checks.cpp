@@ -1,5 +1,6 @@
 #include "discrepancy/posterior_checks.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <stdexcept>
@@ -296,6 +297,7 @@ GapMeasures gap_measures(const PosteriorDraws& draws, const ObservedStatistics& 
   out.standardised_mean = to_std_vector(standardised);
   out.rms_standardised_mean =
       std::sqrt(standardised.squaredNorm() / static_cast<double>(standardised.size()));
+  out.systematic_gap = std::sqrt(std::max(0.0, out.rms_standardised_mean * out.rms_standardised_mean - 1.0));
   out.coverage95 = coverage95(draws);
   return out;
 }
