@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -134,7 +135,8 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<io::WimRecord>
     return !matched_checks(*fleet::make_extension(a, site), r.checks_before).empty() &&
            matched_checks(*fleet::make_extension(b, site), r.checks_before).empty();
   });
-  Fitted best;
+  std::vector<Fitted> supported;  // refits that pass both tests, parallel to supported_index
+  std::vector<std::size_t> supported_index;
   for (const auto& name : names) {
     auto ext = fleet::make_extension(name, site);
     CandidateResult c;
@@ -159,18 +161,43 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<io::WimRecord>
     } else if (!(c.heldout_gain > 0.0)) {
       c.verdict = "held-out skill not better than the base model's";
     } else {
-      c.verdict = "supported";
-      if (!best.smc || c.log_bayes_factor > r.log_bayes_factor) {
-        best = std::move(f);
-        r.effect = name;
-        r.log_bayes_factor = c.log_bayes_factor;
-        r.heldout_gain = c.heldout_gain;
-      }
+      supported.push_back(std::move(f));
+      supported_index.push_back(r.candidates.size());
     }
     r.candidates.push_back(std::move(c));
   }
-  for (auto& c : r.candidates) {
-    if (c.verdict == "supported") c.verdict = c.name == r.effect ? "chosen: largest log Bayes factor" : "supported, but " + r.effect + " has the larger log Bayes factor";
+
+  // The choice. Evidence first; but two effects whose log Bayes factors differ by less than the
+  // threshold are not told apart by it (the SMC's own evidence error is about a nat), and then
+  // held-out skill decides: a bump just before a sensor and a low gain on that sensor, for one,
+  // fit 100 trucks about equally well. The others within the threshold are the alternatives.
+  std::size_t chosen = supported.size();
+  double best_bf = -std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < supported.size(); ++k) best_bf = std::max(best_bf, r.candidates[supported_index[k]].log_bayes_factor);
+  for (std::size_t k = 0; k < supported.size(); ++k) {
+    const auto& c = r.candidates[supported_index[k]];
+    if (c.log_bayes_factor < best_bf - o.min_log_bayes_factor) continue;
+    if (chosen == supported.size() || c.heldout_gain > r.candidates[supported_index[chosen]].heldout_gain) chosen = k;
+  }
+  Fitted best;
+  if (chosen < supported.size()) {
+    auto& pick = r.candidates[supported_index[chosen]];
+    r.effect = pick.name;
+    r.log_bayes_factor = pick.log_bayes_factor;
+    r.heldout_gain = pick.heldout_gain;
+    best = std::move(supported[chosen]);
+    for (std::size_t k = 0; k < supported.size(); ++k) {
+      auto& c = r.candidates[supported_index[k]];
+      if (k == chosen) {
+        c.verdict = "chosen";
+      } else if (c.log_bayes_factor >= best_bf - o.min_log_bayes_factor) {
+        c.verdict = "alternative: evidence within " + fmt(o.min_log_bayes_factor, 1) + " of " + r.effect +
+                    ", held-out skill lower";
+        r.alternatives.push_back(c.name);
+      } else {
+        c.verdict = "supported, but less than " + r.effect;
+      }
+    }
   }
 
   if (best.smc) {

@@ -3,7 +3,8 @@
 // checks, refit with each by the same SMC, choose by log-evidence (the Bayes factor against the
 // base model) confirmed by held-out predictive skill, and measure the gap again with the chosen
 // effect in the model. "none" is an answer: when no candidate is decisively better on both
-// counts.
+// counts. Among the supported candidates, those within the threshold of the largest log Bayes
+// factor are not told apart by evidence, and the best held-out skill among them is chosen.
 //
 // By default every extension is refitted, the shortlisted ones first: the checks look at
 // residuals after each truck's own (k, k_t, z) have been fitted, and those latents absorb much
@@ -76,6 +77,9 @@ struct DiagnoseResult {
   std::string effect = "none";
   std::string description;                 // of the effect, or why none
   std::vector<ParameterEstimate> parameters;  // of the chosen effect
+  // Other supported effects whose evidence is within the threshold of the chosen one's: these
+  // data cannot tell them apart by evidence (held-out skill chose).
+  std::vector<std::string> alternatives;
   double log_bayes_factor = 0.0;
   double heldout_gain = 0.0;
   int trucks = 0, heldout_trucks = 0, sensors = 0;

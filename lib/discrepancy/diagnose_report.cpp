@@ -101,6 +101,12 @@ void write_summary(std::ostream& os, const DiagnoseResult& r) {
          << p.null_value << " |\n";
     }
     os << "\n";
+    if (!r.alternatives.empty()) {
+      os << "Evidence cannot tell it apart from:";
+      for (const auto& alt : r.alternatives) os << " " << alt;
+      os << " (log Bayes factors within " << r.min_log_bayes_factor << "; held-out skill chose " << r.effect
+         << "; see the candidates below).\n\n";
+    }
   }
   os << "## Gap between model and measurements\n\n| measure | base model | " << (r.effect == "none" ? "-" : r.effect)
      << " |\n|---|---|---|\n";
@@ -185,6 +191,7 @@ nlohmann::json diagnosis_to_json(const DiagnoseResult& r) {
   j["effect"] = r.effect;
   j["description"] = r.description;
   j["parameters"] = parameters_json(r.parameters);
+  j["alternatives"] = r.alternatives;
   j["log_bayes_factor"] = r.log_bayes_factor;
   j["heldout_gain"] = r.heldout_gain;
   j["gap_before"] = gap_json(r.checks_before.gap);
