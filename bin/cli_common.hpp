@@ -9,6 +9,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "io/wim_log.hpp"
 #include "site/site.hpp"
 
 namespace ssrfleet::cli {
@@ -35,6 +36,10 @@ bool parse_or_help(int argc, const char* const argv[], const po::options_descrip
 
 // Parses a seed: a whole number in [0, 2^64). Anything else is a UsageError naming the option.
 std::uint64_t parse_seed(const std::string& text, const std::string& option = "--seed");
+
+// Reads a whole WIM log for `site`: DataError (line 1, the first IF column) when its sensor
+// count is not the site's, naming the --sensors value in use.
+std::vector<io::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags);
 
 // Writes through `write` to `path` atomically, or to stdout when path is "-" or empty.
 void write_output(const std::string& path, const std::function<void(std::ostream&)>& write);

@@ -69,13 +69,7 @@ int run_diagnose(int argc, const char* const argv[]) {
   o.validate();
   const site::Site site(site::load_road(road), site_flags.to_options());
   for (const auto& name : o.candidates) fleet::make_extension(name, site);  // unknown names fail before any work
-  int sensors = 0;
-  const auto records = io::read_wim_log_file(log_path, site.options().unsprung_mass_kg, &sensors);
-  if (sensors != site.sensors()) {
-    throw DataError(log_path, 1, "if_" + std::to_string(sensors),
-                    "the log has " + std::to_string(sensors) + " sensors but the site has " +
-                        std::to_string(site.sensors()) + " (--sensors " + site_flags.sensors + ")");
-  }
+  const auto records = read_site_log(log_path, site, site_flags);
   if (!quiet) o.progress = &std::cerr;
   const auto result = discrepancy::diagnose(site, records, o);
   if (!json_path.empty()) {

@@ -43,13 +43,7 @@ int run_fit(int argc, const char* const argv[]) {
   if (method != "smc" && method != "mcmc") throw UsageError("--method '" + method + "': must be smc or mcmc");
 
   const site::Site site(site::load_road(road), site_flags.to_options());
-  int sensors = 0;
-  const auto records = io::read_wim_log_file(log_path, site.options().unsprung_mass_kg, &sensors);
-  if (sensors != site.sensors()) {
-    throw DataError(log_path, 1, "if_" + std::to_string(sensors),
-                    "the log has " + std::to_string(sensors) + " sensors but the site has " +
-                        std::to_string(site.sensors()) + " (--sensors " + site_flags.sensors + ")");
-  }
+  const auto records = read_site_log(log_path, site, site_flags);
   if (!quiet) {
     std::cerr << "ssrfleet fit: " << records.size() << " trucks from " << log_path << ", road " << site.surface().name
               << ", method " << method << ", seed " << seed << "\n";
