@@ -1,0 +1,68 @@
+// `ssrfleet diagnose` and `simulate --effect` through the command line: the report files, and
+// bad input refused with a message and the documented exit status, before any long work.
+#include <filesystem>
+
+#include <catch2/catch.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+
+using namespace ssrfleet;
+using test::run_ssrfleet;
+
+namespace {
+std::string q(const std::string& path) { return "'" + path + "'"; }
+}  // namespace
+
+TEST_CASE("diagnose on a small log writes the JSON report and the per-sensor files", "[cli][diagnose]") {
+  test::TempDir dir;
+  const std::string log = dir.file("log.csv");
+  const auto sim = run_ssrfleet("simulate --trucks 12 --seed 4 --quiet --effect sensor_gain:sensor=3,gain=1.1 --out " + q(log), dir);
+  INFO(sim.err);
+  REQUIRE(sim.status == 0);
+  CHECK(test::read_text(log).find("effect sensor_gain:sensor=3,gain=1.1") != std::string::npos);  // in the header comment
+  const auto r = run_ssrfleet("diagnose " + q(log) + " --particles 64 --draws 20 --candidates sensor_gain --no-plots --json " +
+                                  q(dir.file("report.json")) + " --out " + q(dir.file("diag")),
+                              dir);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  CHECK(r.err.find("diagnose: fitting the base model") != std::string::npos);  // progress on stderr
+  CHECK(r.out.find("# ssrfleet diagnose") != std::string::npos);               // the summary on stdout
+  const auto j = nlohmann::json::parse(test::read_text(dir.file("report.json")));
+  CHECK(j.contains("effect"));
+  CHECK(j["candidates"].size() == 1);
+  for (const char* f : {"summary.md", "report.json", "residual_pattern.csv", "per_sensor_checks.csv", "checks.csv",
+                        "residual_pattern.gp", "checks.gp"}) {
+    INFO(f);
+    CHECK(std::filesystem::exists(dir.path() / "diag" / f));
+  }
+}
+
+TEST_CASE("diagnose and simulate --effect refuse bad input with a clear message and exit status", "[cli][diagnose]") {
+  test::TempDir dir;
+  const std::string log = dir.file("log.csv");
+  REQUIRE(run_ssrfleet("simulate --trucks 10 --seed 1 --quiet --out " + q(log), dir).status == 0);
+
+  auto r = run_ssrfleet("simulate --trucks 5 --effect wind:speed=3 --quiet --out " + q(dir.file("w.csv")), dir);
+  CHECK(r.status == 64);
+  CHECK(r.err.find("unknown model extension 'wind'") != std::string::npos);
+  CHECK(!std::filesystem::exists(dir.file("w.csv")));
+  r = run_ssrfleet("simulate --trucks 5 --effect tyre_damping:c_t=-3 --quiet --out " + q(dir.file("w.csv")), dir);
+  CHECK(r.status == 64);
+  CHECK(r.err.find("c_t must be a number in [0, 10000]") != std::string::npos);
+
+  r = run_ssrfleet("diagnose " + q(dir.file("missing.csv")), dir);
+  CHECK(r.status == 66);
+  r = run_ssrfleet("diagnose " + q(log) + " --candidates sensor_gain,wind", dir);
+  CHECK(r.status == 64);
+  CHECK(r.err.find("unknown model extension 'wind'") != std::string::npos);
+  r = run_ssrfleet("diagnose " + q(log) + " --particles 1", dir);
+  CHECK(r.status == 64);
+  CHECK(r.err.find("particles") != std::string::npos);
+  r = run_ssrfleet("diagnose " + q(log) + " --seed x", dir);
+  CHECK(r.status == 64);
+  r = run_ssrfleet("diagnose " + q(log) + " --sensors 76,1.5,12", dir);
+  CHECK(r.status == 65);
+  CHECK(r.err.find("the log has 16 sensors but the site has 12") != std::string::npos);
+}
