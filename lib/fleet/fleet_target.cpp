@@ -526,10 +526,6 @@ void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::Par
   older_acceptance_ = total / static_cast<double>(older);
 }
 
-}  // namespace ssrfleet::fleet
-
-namespace ssrfleet::fleet {
-
 void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel) {
   const Eigen::Index P = options_.particles, n = kept_trucks(), d = psi_.rows();
   const ModelExtension& ext = *options_.extension;
