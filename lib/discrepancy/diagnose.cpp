@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <memory>
 #include <sstream>
 
@@ -131,10 +132,10 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<io::WimRecord>
   }
 
   // The shortlist first (a stable order otherwise), so progress shows the likeliest first.
-  std::stable_sort(names.begin(), names.end(), [&](const std::string& a, const std::string& b) {
-    return !matched_checks(*fleet::make_extension(a, site), r.checks_before).empty() &&
-           matched_checks(*fleet::make_extension(b, site), r.checks_before).empty();
-  });
+  std::map<std::string, bool> shortlisted;
+  for (const auto& name : names) shortlisted[name] = !matched_checks(*fleet::make_extension(name, site), r.checks_before).empty();
+  std::stable_sort(names.begin(), names.end(),
+                   [&](const std::string& a, const std::string& b) { return shortlisted[a] && !shortlisted[b]; });
   std::vector<Fitted> supported;  // refits that pass both tests, parallel to supported_index
   std::vector<std::size_t> supported_index;
   for (const auto& name : names) {
