@@ -84,7 +84,7 @@ int run_simulate(int argc, const char* const argv[]) {
        << (effect.empty() ? "" : ", effect ") << effect << "\n";
     io::write_wim_log(os, log.records);
   });
-  if (!truth.empty()) write_output(truth, [&](std::ostream& os) { io::write_truck_list(os, trucks); });
+  if (!truth.empty()) write_output(truth, [&](std::ostream& os) { io::write_truck_list(os, log.trucks); });
 
   if (log.lift_offs > 0) {
     std::cerr << "ssrfleet simulate: warning: " << log.lift_offs

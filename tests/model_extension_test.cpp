@@ -1,11 +1,17 @@
 // The model-extension catalogue (DESIGN.md §6): each extension's forward model against an
 // independent construction of the same physics, and the effect-setting parser.
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
+#include <boost/random/mersenne_twister.hpp>
+#include <boost/random/normal_distribution.hpp>
+#include <boost/random/uniform_01.hpp>
 #include <catch2/catch.hpp>
 
 #include "fleet/extended_forward.hpp"
 #include "fleet/fleet_distribution.hpp"
+#include "fleet/fleet_model.hpp"
 #include "fleet/model_extension.hpp"
 #include "fleet/simulator.hpp"
 #include "site/road_source.hpp"
@@ -32,7 +38,7 @@ double worst_difference(const site::Site& base, const std::string& setting, cons
 TEST_CASE("the catalogue holds the seven canonical effects of the design", "[discrepancy][extension]") {
   const auto names = fleet::extension_names();
   for (const char* want : {"sensor_gain", "tyre_damping", "unsprung_mass", "suspension_damping", "profile_defect",
-                           "speed_bias"}) {
+                           "speed_bias", "second_class"}) {
     INFO(want);
     CHECK(std::find(names.begin(), names.end(), want) != names.end());
   }
@@ -106,6 +112,71 @@ TEST_CASE("profile_defect equals a road with the enveloped bump added to every l
   // Linearity makes the two agree to rounding; and a 10 mm bump is a large effect.
   CHECK(worst_difference(base, "profile_defect:position=84.3,length=0.5,height=0.01", other, trucks) < 1e-9);
   CHECK(worst_difference(base, "profile_defect:position=84.3,length=0.5,height=0.01", base, trucks) > 0.02);
+}
+
+TEST_CASE("second_class: its stiffness density, CDF and draws describe one two-class fleet", "[discrepancy][extension]") {
+  const site::Site site(site::load_road("AS1"), site::SiteOptions{});
+  const auto effect = fleet::parse_extension_setting("second_class:share=0.3,K2=1000000,sigma_k2=100000", site);
+  const fleet::ModelExtension& ext = *effect.extension;
+  const double* psi = effect.psi.data();
+  const double K = 500e3, sd = 50e3;
+  REQUIRE(ext.edits_stiffness_distribution());
+  CHECK(!ext.edits_forward());
+  // The density integrates to 1 and to the CDF (Simpson's rule on a 100 N/m grid over ±10 sd of
+  // both classes: its error is far below 1e-9).
+  const double lo = 0.0, step = 100.0;
+  double integral = 0.0, previous = std::exp(ext.log_stiffness_density(psi, lo, K, sd));
+  double worst_cdf_gap = 0.0;
+  for (double k = lo; k < 2.0e6; k += step) {
+    const double mid = std::exp(ext.log_stiffness_density(psi, k + 0.5 * step, K, sd));
+    const double next = std::exp(ext.log_stiffness_density(psi, k + step, K, sd));
+    integral += step / 6.0 * (previous + 4.0 * mid + next);
+    previous = next;
+    worst_cdf_gap = std::max(worst_cdf_gap, std::abs(integral - ext.stiffness_cdf(psi, k + step, K, sd)));
+  }
+  CHECK(integral == Approx(1.0).epsilon(1e-9));
+  CHECK(worst_cdf_gap < 1e-9);
+  // Draws follow the CDF: Kolmogorov-Smirnov distance of 20000 draws under its 0.1 % critical
+  // value 1.95 / sqrt(n).
+  boost::random::mt19937_64 engine(5);
+  boost::random::uniform_01<double> uniform;
+  boost::random::normal_distribution<double> normal;
+  constexpr int n = 20000;
+  std::vector<double> u(n);
+  for (auto& v : u) {
+    const double a = uniform(engine);
+    v = ext.stiffness_cdf(psi, ext.draw_stiffness(psi, K, sd, a, normal(engine)), K, sd);
+  }
+  std::sort(u.begin(), u.end());
+  double ks = 0.0;
+  for (int i = 0; i < n; ++i) ks = std::max({ks, (i + 1.0) / n - u[i], u[i] - static_cast<double>(i) / n});
+  CHECK(ks < 1.95 / std::sqrt(n));
+  // At share 0 it is the base model's N(K, σ_k²), exactly.
+  const std::vector<double> none{0.0, 1e6, 1e5};
+  for (double k : {3e5, 5e5, 9e5}) {
+    CHECK(ext.log_stiffness_density(none.data(), k, K, sd) == fleet::log_normal_density(k, K, sd));
+    CHECK(ext.draw_stiffness(none.data(), K, sd, 0.0, 0.7) == K + sd * 0.7);
+  }
+}
+
+TEST_CASE("second_class simulates a share of the trucks with the second class's stiffness", "[discrepancy][extension]") {
+  const site::Site site(site::load_road("AS1"), site::SiteOptions{});
+  const auto trucks = some_trucks(site, 400);
+  const auto effect = fleet::parse_extension_setting("second_class:share=0.3,K2=1000000,sigma_k2=100000", site);
+  const auto mixed = fleet::simulate_log(site, trucks, 0.0, 3, *effect.extension, effect.psi);
+  REQUIRE(mixed.trucks.size() == trucks.size());
+  int moved = 0;
+  for (std::size_t i = 0; i < trucks.size(); ++i) {
+    if (mixed.trucks[i].stiffness_npm == trucks[i].stiffness_npm) continue;
+    ++moved;
+    // A moved truck drew k from N(1000, 100²) kN/m: above 650 kN/m (3.5 sd down) but for a 2e-4 chance.
+    CHECK(mixed.trucks[i].stiffness_npm > 650e3);
+  }
+  // Binomial(400, 0.3): mean 120, sd 9.2; allow 4 sd.
+  CHECK(std::abs(moved - 120) < 4 * 9.2);
+  // Everything else is the base model, driven with the edited trucks.
+  const auto plain = fleet::simulate_log(site, mixed.trucks, 0.0, 3);
+  CHECK((mixed.model_if - plain.model_if).abs().maxCoeff() == 0.0);
 }
 
 TEST_CASE("effect settings are checked: name, every parameter, ranges", "[discrepancy][extension]") {

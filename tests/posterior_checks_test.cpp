@@ -12,6 +12,7 @@
 #include <boost/math/quadrature/gauss_kronrod.hpp>
 #include <boost/random/mersenne_twister.hpp>
 #include <boost/random/normal_distribution.hpp>
+#include <boost/random/uniform_01.hpp>
 #include <boost/random/uniform_real_distribution.hpp>
 #include <catch2/catch.hpp>
 
@@ -45,6 +46,24 @@ double smallest_p(int replicates) { return 1.0 / (1.0 + replicates); }
 // jitter each truck's curve by a tenth of σ and σ by its posterior sd 1/sqrt(2 N M), as a
 // well-identified fit would, so the checks should find nothing unless a test plants something.
 // Speed, sprung mass and lateral position are drawn independently of each other and of f.
+// Posterior draws of F(k_i) for kTrucks trucks whose standardised stiffnesses come from
+// `standardised` and are compared with N(0, 1): each draw jitters k_i by a tenth of the fleet sd,
+// as a well-identified fit would. A stream of its own, so the other draws stay as they were.
+template <class Draw>
+std::vector<Eigen::VectorXd> stiffness_pit_draws(std::uint64_t seed, Draw standardised) {
+  boost::random::mt19937_64 engine(seed ^ 0x6b6bULL);
+  boost::random::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::VectorXd k(kTrucks);
+  for (Eigen::Index i = 0; i < kTrucks; ++i) k[i] = standardised(engine);
+  std::vector<Eigen::VectorXd> pit;
+  for (int d = 0; d < kDraws; ++d) {
+    Eigen::VectorXd u(kTrucks);
+    for (Eigen::Index i = 0; i < kTrucks; ++i) u[i] = 0.5 * std::erfc(-(k[i] + 0.1 * normal(engine)) / std::sqrt(2.0));
+    pit.push_back(u);
+  }
+  return pit;
+}
+
 PosteriorDraws make_draws(std::uint64_t seed, double neighbour_correlation = 0.0) {
   boost::random::mt19937_64 engine(seed);
   boost::random::normal_distribution<double> normal(0.0, 1.0);
@@ -88,6 +107,9 @@ PosteriorDraws make_draws(std::uint64_t seed, double neighbour_correlation = 0.0
     draws.lateral_m.push_back(lateral);
     draws.sigma_if.push_back(kSigma + sigma_posterior_sd * normal(engine));
   }
+  draws.stiffness_pit = stiffness_pit_draws(seed, [](boost::random::mt19937_64& e) {
+    return boost::random::normal_distribution<double>(0.0, 1.0)(e);
+  });
   return draws;
 }
 
@@ -149,7 +171,7 @@ TEST_CASE("posterior checks report one result per family in enum order", "[check
     CHECK(result.flagged == (result.p_value < 0.01));
     CHECK(result.p_value >= smallest_p(200));
     CHECK(result.p_value <= 1.0);
-    if (result.kind == CheckKind::kAutocorrelation) {
+    if (result.kind == CheckKind::kAutocorrelation || result.kind == CheckKind::kStiffnessDistribution) {
       CHECK(result.per_sensor.empty());
       CHECK(result.sensor == 0);
     } else {
@@ -220,6 +242,12 @@ TEST_CASE("replicated statistics follow their distributions under the model", "[
   for (CheckKind kind : {CheckKind::kSpeed, CheckKind::kMass, CheckKind::kLateral}) {
     check_replicated_mean(check(report, kind), mean_cov, sd_cov, kReplicates);
   }
+
+  // kStiffnessDistribution: Anderson-Darling A² of N uniforms has mean 1 and variance
+  // 2 (π² - 9) / 3 + (10 - π²) / N (Anderson & Darling 1954).
+  const double pi2 = std::acos(-1.0) * std::acos(-1.0);
+  check_replicated_mean(check(report, CheckKind::kStiffnessDistribution), 1.0,
+                        std::sqrt(2.0 * (pi2 - 9.0) / 3.0 + (10.0 - pi2) / N), kReplicates);
 }
 
 TEST_CASE("posterior checks are reproducible for a seed and the observed statistic does not depend on it",
@@ -288,6 +316,27 @@ TEST_CASE("noise correlated along the array fails the autocorrelation check eith
   }
 }
 
+TEST_CASE("a second class of stiffer trucks fails the stiffness-distribution check only", "[checks]") {
+  // 30 % of the trucks 10 sd above the rest (1000 against 500 ± 50 kN/m), compared with the
+  // single normal that matches the whole fleet's mean and sd (what a fit of the base model
+  // settles on). At 4 sd apart, 100 trucks give A² of only about 4 (p ≈ 0.01).
+  boost::random::mt19937_64 classes(90);
+  boost::random::uniform_01<double> uniform;
+  boost::random::normal_distribution<double> normal(0.0, 1.0);
+  const double mean = 0.3 * 10.0, sd = std::sqrt(1.0 + 0.3 * 0.7 * 100.0);
+  PosteriorDraws draws = make_draws(9);
+  draws.stiffness_pit = stiffness_pit_draws(9, [&](boost::random::mt19937_64& e) {
+    const double k = (uniform(classes) < 0.3 ? 10.0 : 0.0) + normal(e);
+    return (k - mean) / sd;
+  });
+  const CheckReport report = discrepancy::run_checks(draws, options_with(kReplicates, 9, 1e-3));
+  check_found(check(report, CheckKind::kStiffnessDistribution), kReplicates);
+  CHECK(report.gap.stiffness_distribution > 3.0);
+  for (CheckKind kind : {CheckKind::kSensorMean, CheckKind::kSensorDispersion, CheckKind::kMass}) {
+    check_not_found(check(report, kind));
+  }
+}
+
 TEST_CASE("posterior checks reject inconsistent sizes naming the culprit", "[checks]") {
   const PosteriorDraws good = make_draws(8);
   const CheckOptions options = options_with(10, 1);
@@ -330,6 +379,16 @@ TEST_CASE("posterior checks reject inconsistent sizes naming the culprit", "[che
     PosteriorDraws d = good;
     d.sigma_if[0] = 0.0;
     rejects(d, "sigma_if[0]");
+  }
+  {
+    PosteriorDraws d = good;
+    d.stiffness_pit.pop_back();
+    rejects(d, "stiffness_pit");
+  }
+  {
+    PosteriorDraws d = good;
+    d.stiffness_pit[2][4] = 1.5;
+    rejects(d, "stiffness_pit[2]");
   }
   {
     PosteriorDraws d = good;

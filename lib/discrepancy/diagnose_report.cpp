@@ -32,6 +32,7 @@ nlohmann::json gap_json(const GapMeasures& g) {
   return {{"rms_standardised_mean_residual", g.rms_standardised_mean},
           {"systematic_gap", g.systematic_gap},
           {"coverage95", g.coverage95},
+          {"stiffness_distribution", g.stiffness_distribution},
           {"mean_residual", g.mean_residual},
           {"standardised_mean_residual", g.standardised_mean}};
 }
@@ -116,7 +117,10 @@ void write_summary(std::ostream& os, const DiagnoseResult& r) {
   os << "| systematic part of it, sqrt(max(0, RMS^2 - 1)) (about 0 when the model fits) | "
      << fixed(r.checks_before.gap.systematic_gap, 2) << " | " << fixed(r.checks_after.gap.systematic_gap, 2) << " |\n";
   os << "| observed IFs inside their 95 % posterior predictive interval | " << fixed(100 * r.checks_before.gap.coverage95, 1)
-     << " % | " << fixed(100 * r.checks_after.gap.coverage95, 1) << " % |\n\n";
+     << " % | " << fixed(100 * r.checks_after.gap.coverage95, 1) << " % |\n";
+  os << "| trucks' suspension stiffnesses against the fleet distribution, Anderson-Darling A^2 (about 1 or less when it fits) | "
+     << fixed(r.checks_before.gap.stiffness_distribution, 2) << " | " << fixed(r.checks_after.gap.stiffness_distribution, 2)
+     << " |\n\n";
   os << "## Posterior predictive checks\n\n";
   write_checks_table(os, r);
   os << "\n## Candidates\n\n| extension | failed checks in its signature | log Bayes factor | held-out gain | estimate | verdict |\n"

@@ -8,6 +8,7 @@
 
 #include <boost/random/mersenne_twister.hpp>
 #include <boost/random/normal_distribution.hpp>
+#include <boost/random/uniform_01.hpp>
 
 namespace ssrfleet::discrepancy {
 
@@ -17,8 +18,9 @@ using fleet::CheckKind;
 namespace {
 
 constexpr int kFamilies = static_cast<int>(CheckKind::kCount);
-// The families with a value per sensor come first in CheckKind; the autocorrelation, a property
-// of each truck's whole residual vector, is the only one without.
+// The families with a value per sensor come first in CheckKind; the autocorrelation (a property
+// of each truck's whole residual vector) and the stiffness distribution (of the trucks' latents)
+// have none.
 constexpr int kPerSensorFamilies = static_cast<int>(CheckKind::kAutocorrelation);
 // The covariate families kSpeed, kMass, kLateral are consecutive.
 constexpr int kFirstCovariate = static_cast<int>(CheckKind::kSpeed);
@@ -80,6 +82,34 @@ void validate(const PosteriorDraws& draws, const CheckOptions& options) {
     require(std::isfinite(draws.sigma_if[d]) && draws.sigma_if[d] > 0.0,
             indexed("sigma_if", d) + " is " + std::to_string(draws.sigma_if[d]) + ", but must be positive");
   }
+  require(draws.stiffness_pit.empty() || draws.stiffness_pit.size() == D,
+          "stiffness_pit holds " + std::to_string(draws.stiffness_pit.size()) + " draws, but model_if holds " +
+              std::to_string(D) + " (or must be empty)");
+  for (std::size_t d = 0; d < draws.stiffness_pit.size(); ++d) {
+    const Eigen::VectorXd& u = draws.stiffness_pit[d];
+    require(u.size() == y.cols(), indexed("stiffness_pit", d) + " has " + std::to_string(u.size()) +
+                                      " entries, but observed has " + n + " trucks");
+    require((u.array() >= 0.0 && u.array() <= 1.0).all(), indexed("stiffness_pit", d) + " holds a value outside [0, 1]");
+  }
+}
+
+// ---- The stiffness family ----------------------------------------------------------------------
+
+// Anderson-Darling A² of a sample's probability integral transforms against U(0, 1):
+// -n - (1/n) Σ_i (2i - 1) [ln u_(i) + ln(1 - u_(n+1-i))]. It weighs the tails, where a class of
+// stiffer or softer trucks shows first. E[A²] = 1 under the model, for every n.
+double anderson_darling(Eigen::VectorXd u) {
+  std::sort(u.data(), u.data() + u.size());
+  // u of exactly 0 or 1 (a k far in a tail, Φ rounded) would give an infinite A²: clamp it to
+  // the last representable tail, which still counts as a decisive failure.
+  constexpr double kTiny = 1e-300;
+  const Index n = u.size();
+  double sum = 0.0;
+  for (Index i = 0; i < n; ++i) {
+    const double lo = std::max(u[i], kTiny), hi = std::max(1.0 - u[n - 1 - i], kTiny);
+    sum += (2.0 * static_cast<double>(i) + 1.0) * (std::log(lo) + std::log(hi));
+  }
+  return -static_cast<double>(n) - sum / static_cast<double>(n);
 }
 
 // ---- The family statistics of one residual matrix ---------------------------------------------
@@ -94,7 +124,7 @@ Eigen::VectorXd unit_direction(const Eigen::VectorXd& x) {
   return norm > 0.0 ? Eigen::VectorXd(u / norm) : Eigen::VectorXd::Zero(x.size());
 }
 
-// Evaluates every family's statistic T on a residual matrix (sensors x trucks), keeping the
+// Evaluates every residual family's statistic T on a residual matrix (sensors x trucks), keeping the
 // per-sensor values behind it. It is run once per posterior draw on the observed residuals and
 // once per replicate, so it owns its workspace and allocates nothing per call.
 class ResidualStatistics {
@@ -202,6 +232,8 @@ ObservedStatistics evaluate_observed(const PosteriorDraws& draws, const Eigen::M
     residual = draws.observed - draws.model_if[d];
     stats.evaluate(residual, draws.sigma_if[d], lateral_directions.col(static_cast<Index>(d)));
     out.T_by_draw[d] = stats.T;
+    out.T_by_draw[d][family(CheckKind::kStiffnessDistribution)] =
+        draws.stiffness_pit.empty() ? 0.0 : anderson_darling(draws.stiffness_pit[d]);
     out.per_sensor_mean += stats.per_sensor;
     out.residual_mean += stats.row_mean;
   }
@@ -222,6 +254,11 @@ ReplicateTally replicate(const PosteriorDraws& draws, const Eigen::MatrixXd& lat
   const std::size_t D = draws.model_if.size();
   boost::random::mt19937_64 engine(options.seed);
   boost::random::normal_distribution<double> std_normal(0.0, 1.0);
+  // The stiffness replicates have a stream of their own, so the residual families' replicates
+  // are the same with or without them.
+  boost::random::mt19937_64 fleet_engine(options.seed ^ 0x666c656574ULL /* "fleet" */);
+  boost::random::uniform_01<double> uniform;
+  Eigen::VectorXd u(draws.observed.cols());
   Eigen::MatrixXd residual(draws.observed.rows(), draws.observed.cols());
   ReplicateTally tally;
   for (int r = 0; r < options.replicates; ++r) {
@@ -233,11 +270,16 @@ ReplicateTally replicate(const PosteriorDraws& draws, const Eigen::MatrixXd& lat
       for (Index m = 0; m < residual.rows(); ++m) residual(m, i) = sigma * std_normal(engine);
     }
     stats.evaluate(residual, sigma, lateral_directions.col(static_cast<Index>(d)));
+    FamilyValues T_rep = stats.T;
+    if (!draws.stiffness_pit.empty()) {
+      for (Index i = 0; i < u.size(); ++i) u[i] = uniform(fleet_engine);
+      T_rep[family(CheckKind::kStiffnessDistribution)] = anderson_darling(u);
+    }
     const FamilyValues& T_obs = observed.T_by_draw[d];
     for (int k = 0; k < kFamilies; ++k) {
       tally.observed_sum[k] += T_obs[k];
-      tally.replicated_sum[k] += stats.T[k];
-      if (stats.T[k] >= T_obs[k]) ++tally.at_least_observed[k];
+      tally.replicated_sum[k] += T_rep[k];
+      if (T_rep[k] >= T_obs[k]) ++tally.at_least_observed[k];
     }
   }
   return tally;
@@ -299,6 +341,9 @@ GapMeasures gap_measures(const PosteriorDraws& draws, const ObservedStatistics& 
       std::sqrt(standardised.squaredNorm() / static_cast<double>(standardised.size()));
   out.systematic_gap = std::sqrt(std::max(0.0, out.rms_standardised_mean * out.rms_standardised_mean - 1.0));
   out.coverage95 = coverage95(draws);
+  double stiffness = 0.0;
+  for (const FamilyValues& T : observed.T_by_draw) stiffness += T[family(CheckKind::kStiffnessDistribution)];
+  out.stiffness_distribution = stiffness / static_cast<double>(observed.T_by_draw.size());
   return out;
 }
 

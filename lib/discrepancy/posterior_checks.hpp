@@ -11,10 +11,16 @@
 //   kAutocorrelation   T = |ā + 1/M| sqrt(N (M - 1)), ā = mean over trucks of the lag-1
 //                      autocorrelation of r_i· along the array, centred on the truck's mean
 //                      (-1/M is its exact mean for white noise, so T is two-sided about it)
+//   kStiffnessDistribution  T = A², the Anderson-Darling statistic of u_i = F(k_i | θ, ψ), each
+//                      truck's suspension stiffness under the draw's fleet distribution,
+//                      against U(0, 1) (a second class of trucks, say, bunches the u_i)
 //
 // The p-value compares T on the observed data with T on data replicated from the posterior:
 // replicate r uses draw d = r mod D and y_rep = f_d + σ_d ε with fresh ε, and
-// p = (1 + #{T_rep >= T_obs(d)}) / (1 + R). A small p flags the family; the per-sensor values
+// p = (1 + #{T_rep >= T_obs(d)}) / (1 + R). For the stiffness family the replicate is a fresh
+// fleet of N trucks from the draw's distribution, whose u_i are iid U(0, 1) whatever θ and ψ.
+// These realised discrepancies of the latents (Gelman, Meng & Stern 1996, §2.3) are
+// conservative: the posterior pulls each k_i towards the fleet distribution. A small p flags the family; the per-sensor values
 // behind T say where. The gap measures summarise the per-sensor mean misfit and the calibration
 // of the 95 % predictive intervals, for reports.
 #pragma once
@@ -36,6 +42,9 @@ struct PosteriorDraws {
   std::vector<Eigen::MatrixXd> model_if;   // per draw: f, sensors x trucks, at that draw's latents
   std::vector<Eigen::VectorXd> lateral_m;  // per draw: each truck's lateral position
   std::vector<double> sigma_if;            // per draw: σ
+  // per draw: F(k_i | θ, ψ) of every truck's k under the draw's fleet distribution. Empty: the
+  // stiffness family is vacuous (T = 0, p = 1).
+  std::vector<Eigen::VectorXd> stiffness_pit;
 };
 
 struct CheckResult {
@@ -58,6 +67,9 @@ struct GapMeasures {
   // "the gap shrinks by half" is judged on this part.
   double systematic_gap = 0.0;
   double coverage95 = 0.0;             // share of y_im inside its posterior predictive 95 % interval
+  // The fleet level: the posterior mean of the stiffness family's A² (about 1 when the trucks'
+  // k look like draws from the fleet distribution; 0 without stiffness_pit).
+  double stiffness_distribution = 0.0;
 };
 
 struct CheckReport {

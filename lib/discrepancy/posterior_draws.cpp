@@ -34,27 +34,34 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::FleetSmc& fi
   out.model_if.assign(chosen.size(), Eigen::MatrixXd());
   out.lateral_m.assign(chosen.size(), Eigen::VectorXd());
   out.sigma_if.assign(chosen.size(), 0.0);
+  out.stiffness_pit.assign(chosen.size(), Eigen::VectorXd());
   const fleet::ModelExtension* extension = target.extension();
+  // An extension of the fleet model only (second_class) leaves every pass the base model's.
+  const fleet::ModelExtension* forward = extension != nullptr && extension->edits_forward() ? extension : nullptr;
   const smc::ParallelFor parallel(threads);
   parallel(static_cast<Eigen::Index>(chosen.size()), [&](Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index d = begin; d < end; ++d) {
       const Eigen::Index p = chosen[static_cast<std::size_t>(d)];
       const Eigen::VectorXd psi = target.psi().col(p);
       std::vector<fleet::ExtendedPass> passes;
-      Eigen::VectorXd lateral(n);
+      Eigen::VectorXd lateral(n), pit(n);
+      const double K = target.theta()(fleet::kK, p), sigma_k = target.theta()(fleet::kSigmaK, p);
       for (Eigen::Index i = 0; i < n; ++i) {
         const double* x = target.latents().col(p).data() + 3 * i;
         lateral[i] = x[fleet::kLateral];
+        pit[i] = extension != nullptr ? extension->stiffness_cdf(psi.data(), x[fleet::kStiffness], K, sigma_k)
+                                      : fleet::normal_cdf((x[fleet::kStiffness] - K) / sigma_k);
         passes.push_back({fleet::base_pass(site, out.speed_mps[i], out.sprung_mass_kg[i], x[fleet::kStiffness],
                                            x[fleet::kTyreStiffness], lateral[i]),
                           psi.data()});
       }
       Eigen::ArrayXXd f(M, n);
-      fleet::simulate_passes(site, extension, passes, f);
+      fleet::simulate_passes(site, forward, passes, f);
       const auto slot = static_cast<std::size_t>(d);
       out.model_if[slot] = f.matrix();
       out.lateral_m[slot] = lateral;
       out.sigma_if[slot] = target.theta()(fleet::kSigmaIf, p);
+      out.stiffness_pit[slot] = pit;
     }
   });
   return out;

@@ -46,6 +46,9 @@ inline double log_normal_density(double x, double mean, double sd) {
   return -0.5 * (kLog2Pi + u * u) - std::log(sd);
 }
 
+// Φ(x), the standard normal CDF.
+inline double normal_cdf(double x) { return 0.5 * std::erfc(-x * 0.70710678118654752440); }
+
 // log of P(lo <= X <= hi) for X ~ N(mean, sd^2), accurate in the tails.
 double log_normal_mass(double lo, double hi, double mean, double sd);
 

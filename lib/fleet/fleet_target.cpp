@@ -73,6 +73,7 @@ void FleetTarget::initialise(const smc::RngFactory& rngs) {
     }
   }
   extension_scale_ = 1.0;
+  stiffness_scale_ = 1.0;
   latents_.resize(0, options_.particles);
   ssr_.resize(0, options_.particles);
   sums_.setZero();
@@ -109,7 +110,12 @@ void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& 
   for (Eigen::Index i = 0; i < P; ++i) {
     smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
     const HyperVector t = theta_of(i);
-    latents_(3 * n + kStiffness, i) = t[kK] + t[kSigmaK] * standard_normal(rng);
+    if (stiffness_edited()) {
+      const double u = smc::uniform01(rng);
+      latents_(3 * n + kStiffness, i) = options_.extension->draw_stiffness(psi_.col(i).data(), t[kK], t[kSigmaK], u, standard_normal(rng));
+    } else {
+      latents_(3 * n + kStiffness, i) = t[kK] + t[kSigmaK] * standard_normal(rng);
+    }
     latents_(3 * n + kTyreStiffness, i) = t[kKt] + t[kSigmaKt] * standard_normal(rng);
     // z ~ N(Z, σ_z²) truncated to the road: the prior box keeps at least ~45 % of the mass on it,
     // so rejection is cheap.
@@ -166,20 +172,45 @@ void FleetTarget::recompute_sums(Eigen::Index i) {
   for (int c = 0; c < kSumCount; ++c) sums_(c, i) = s[c];
 }
 
-double FleetTarget::base_density(const HyperVector& t, const double* s,
-                                 const double* newest) const {
+bool FleetTarget::stiffness_edited() const {
+  return options_.extension != nullptr && options_.extension->edits_stiffness_distribution();
+}
+
+double FleetTarget::latent_log_density(const double* x, const HyperVector& t, const double* psi) const {
+  if (!stiffness_edited()) return log_latent_density(x[kStiffness], x[kTyreStiffness], x[kLateral], t, lateral_);
+  // The base density with the k factor swapped for the extension's.
+  return log_latent_density(x[kStiffness], x[kTyreStiffness], x[kLateral], t, lateral_) -
+         log_normal_density(x[kStiffness], t[kK], t[kSigmaK]) +
+         options_.extension->log_stiffness_density(psi, x[kStiffness], t[kK], t[kSigmaK]);
+}
+
+double FleetTarget::stiffness_log_density(Eigen::Index i, double mean, double sd, const double* psi,
+                                          Eigen::Index trucks) const {
+  double lp = 0.0;
+  for (Eigen::Index j = 0; j < trucks; ++j) {
+    lp += options_.extension->log_stiffness_density(psi, latents_(3 * j + kStiffness, i), mean, sd);
+  }
+  return lp;
+}
+
+double FleetTarget::base_density(Eigen::Index i, const HyperVector& t, const double* newest) const {
+  const double* s = sums_.col(i).data();
+  const double* psi = psi_.col(i).data();
   double lp = options_.prior.log_prior(t);
   if (lp == -kInf) return lp;
   const double n = static_cast<double>(trucks() - 1);
   if (n > 0) {
-    lp += sum_log_normal(n, s[kSumK], s[kSumK2], t[kK], t[kSigmaK]);
+    // With an extension's stiffness distribution there is no sufficient statistic: every older
+    // truck's k is in (the exact regime keeps them all).
+    lp += stiffness_edited() ? stiffness_log_density(i, t[kK], t[kSigmaK], psi, kept_trucks() - 1)
+                             : sum_log_normal(n, s[kSumK], s[kSumK2], t[kK], t[kSigmaK]);
     lp += sum_log_normal(n, s[kSumKt], s[kSumKt2], t[kKt], t[kSigmaKt]);
     lp += sum_log_normal(n, s[kSumZ], s[kSumZ2], t[kZ], t[kSigmaZ]) -
           n * log_normal_mass(lateral_.lo_m, lateral_.hi_m, t[kZ], t[kSigmaZ]);
     const double nm = n * sensors_;
     lp += -0.5 * nm * kLog2Pi - nm * std::log(t[kSigmaIf]) - s[kSumSsr] / (2.0 * t[kSigmaIf] * t[kSigmaIf]);
   }
-  return lp + log_latent_density(newest[kStiffness], newest[kTyreStiffness], newest[kLateral], t, lateral_);
+  return lp + latent_log_density(newest, t, psi);
 }
 
 double FleetTarget::newest_loglik(double ssr, double sigma_if) const {
@@ -197,7 +228,7 @@ void FleetTarget::simulate_ssr(const std::vector<SsrJob>& jobs) const {
     else *job.ssr_out = kInf;
   }
   if (physical.empty()) return;
-  if (options_.extension != nullptr) {
+  if (options_.extension != nullptr && options_.extension->edits_forward()) {
     std::vector<ExtendedPass> passes;
     passes.reserve(physical.size());
     for (const SsrJob* job : physical) {
@@ -248,7 +279,7 @@ void FleetTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Ei
   const Eigen::Index newest = kept_trucks() - 1;
   for (Eigen::Index i = 0; i < options_.particles; ++i) {
     const HyperVector t = theta_of(i);
-    log_base[i] = base_density(t, sums_.col(i).data(), latents_.col(i).data() + 3 * newest);
+    log_base[i] = base_density(i, t, latents_.col(i).data() + 3 * newest);
     loglik[i] = newest_loglik(ssr_(newest, i), t[kSigmaIf]);
   }
 }
@@ -269,7 +300,7 @@ void FleetTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen::Ma
   residuals(kept_trucks() - 1, proposed, proposed_ssr_, parallel);
   for (Eigen::Index i = 0; i < P; ++i) {
     const HyperVector t = theta_of(i);
-    log_base[i] = base_density(t, sums_.col(i).data(), proposed.col(i).data());
+    log_base[i] = base_density(i, t, proposed.col(i).data());
     loglik[i] = newest_loglik(proposed_ssr_[i], t[kSigmaIf]);
   }
 }
@@ -303,10 +334,12 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
     older_trucks_sweep(rngs.child(1), parallel, older_sweeps_done_ % 2 == 1);
     ++older_sweeps_done_;
   }
-  if (phi == 1.0 && options_.extension != nullptr && extension_sweeps_done_ < options_.extension_sweeps) {
+  if (phi == 1.0 && options_.extension != nullptr && options_.extension->edits_forward() &&
+      extension_sweeps_done_ < options_.extension_sweeps) {
     extension_sweep(rngs.child(2), parallel);
     ++extension_sweeps_done_;
   }
+  if (stiffness_edited()) stiffness_distribution_sweep(rngs.child(3), parallel);
   const Eigen::Index newest = kept_trucks() - 1;
   const double n_all = static_cast<double>(trucks());  // the newest truck's latents are in γ in full
   const auto& prior = options_.prior;
@@ -319,12 +352,14 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
       // Sums over all n+1 latents (older ones from the running sums, plus the newest).
       const double sk = s[kSumK] + x[kStiffness], sk2 = s[kSumK2] + x[kStiffness] * x[kStiffness];
       const double skt = s[kSumKt] + x[kTyreStiffness], skt2 = s[kSumKt2] + x[kTyreStiffness] * x[kTyreStiffness];
-      t[kK] = draw_truncated_normal(rng, sk / n_all, t[kSigmaK] / std::sqrt(n_all), prior.lo[kK], prior.hi[kK]);
+      // (K, σ_k) have standard conditionals only under the base model's N(K, σ_k²); an extension's
+      // stiffness distribution moves them in stiffness_distribution_sweep instead.
+      if (!stiffness_edited()) t[kK] = draw_truncated_normal(rng, sk / n_all, t[kSigmaK] / std::sqrt(n_all), prior.lo[kK], prior.hi[kK]);
       t[kKt] = draw_truncated_normal(rng, skt / n_all, t[kSigmaKt] / std::sqrt(n_all), prior.lo[kKt], prior.hi[kKt]);
       if (trucks() >= 2) {
         const double ssk = std::max(0.0, sk2 - 2.0 * t[kK] * sk + n_all * t[kK] * t[kK]);
         const double sskt = std::max(0.0, skt2 - 2.0 * t[kKt] * skt + n_all * t[kKt] * t[kKt]);
-        t[kSigmaK] = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), ssk, prior.lo[kSigmaK], prior.hi[kSigmaK]);
+        if (!stiffness_edited()) t[kSigmaK] = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), ssk, prior.lo[kSigmaK], prior.hi[kSigmaK]);
         t[kSigmaKt] = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), sskt, prior.lo[kSigmaKt], prior.hi[kSigmaKt]);
       }
       // (Z, σ_z): the Gaussian part of their conditional is standard; the truncation to the road
@@ -358,7 +393,7 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
         }
       }
       for (int j = 0; j < kHyperCount; ++j) theta_(j, i) = t[j];
-      log_base[i] = base_density(t, s, x);
+      log_base[i] = base_density(i, t, x);
       loglik[i] = newest_loglik(ssr_new, t[kSigmaIf]);
     }
   });
@@ -389,6 +424,7 @@ void FleetTarget::save(io::BinaryWriter& out) const {
   if (psi_.rows() > 0) {  // only with an extension, so checkpoints without one keep their format
     out.matrix(psi_);
     out.value(extension_scale_);
+    out.value(stiffness_scale_);
   }
 }
 
@@ -428,6 +464,7 @@ void FleetTarget::load(io::BinaryReader& in) {
   if (psi_.rows() > 0) {
     psi_ = in.matrix("psi", psi_.rows(), P);
     extension_scale_ = in.value<double>("extension_scale");
+    stiffness_scale_ = in.value<double>("stiffness_scale");
   }
   older_sweeps_done_ = 0;
   extension_sweeps_done_ = 0;
@@ -461,7 +498,12 @@ void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::Par
       smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
       const HyperVector t = theta_of(i);
       for (Eigen::Index j = 0; j < older; ++j) {
-        if (stiffness_from_prior) {
+        if (stiffness_from_prior && stiffness_edited()) {
+          const double u = smc::uniform01(rng);
+          proposals(3 * j + kStiffness, i) = options_.extension->draw_stiffness(psi_.col(i).data(), t[kK], t[kSigmaK], u, standard_normal(rng));
+          proposals(3 * j + kTyreStiffness, i) = t[kKt] + t[kSigmaKt] * standard_normal(rng);
+          proposals(3 * j + kLateral, i) = latents_(3 * j + kLateral, i);
+        } else if (stiffness_from_prior) {
           proposals(3 * j + kStiffness, i) = t[kK] + t[kSigmaK] * standard_normal(rng);
           proposals(3 * j + kTyreStiffness, i) = t[kKt] + t[kSigmaKt] * standard_normal(rng);
           proposals(3 * j + kLateral, i) = latents_(3 * j + kLateral, i);
@@ -495,7 +537,7 @@ void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::Par
         // With the stiffnesses proposed from p(k, k_t | θ), their density cancels against the
         // proposal's and the MH ratio is the likelihood ratio.
         const auto terms = [&](const double* x, double ssr) {
-          const double prior = stiffness_from_prior ? 0.0 : log_latent_density(x[kStiffness], x[kTyreStiffness], x[kLateral], t, lateral_);
+          const double prior = stiffness_from_prior ? 0.0 : latent_log_density(x, t, psi_.col(i).data());
           return prior + log_likelihood_from_ssr(ssr, sensors_, t[kSigmaIf]);
         };
         const double log_ratio = terms(proposals.col(i).data() + 3 * j, new_ssr(j, i)) -
@@ -572,7 +614,12 @@ void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::Parall
     const double s_new = new_ssr.col(i).sum(), s_old = ssr_.col(i).sum();
     if (!std::isfinite(s_new)) continue;
     const double sigma = theta_(kSigmaIf, i);
-    const double log_ratio = (s_old - s_new) / (2.0 * sigma * sigma);
+    double log_ratio = (s_old - s_new) / (2.0 * sigma * sigma);
+    if (stiffness_edited()) {  // ψ also changes the fleet density of every kept truck's k
+      const double mean = theta_(kK, i), sd = theta_(kSigmaK, i);
+      log_ratio += stiffness_log_density(i, mean, sd, proposals.col(i).data(), n) -
+                   stiffness_log_density(i, mean, sd, psi_.col(i).data(), n);
+    }
     if (log_u[i] < log_ratio) {
       psi_.col(i) = proposals.col(i);
       ssr_.col(i) = new_ssr.col(i);
@@ -582,6 +629,56 @@ void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::Parall
   }
   extension_acceptance_ = static_cast<double>(moved) / static_cast<double>(P);
   extension_scale_ = smc::tuned_scale_factor(extension_scale_, extension_acceptance_);
+}
+
+void FleetTarget::stiffness_distribution_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel) {
+  const ModelExtension& ext = *options_.extension;
+  const Eigen::Index P = options_.particles, n = kept_trucks();
+  if (n == 0) return;
+  const bool with_psi = !ext.edits_forward();  // otherwise ψ moves in extension_sweep, with the likelihood
+  const Eigen::Index d = 2 + (with_psi ? psi_.rows() : 0);
+  Eigen::MatrixXd state(d, P);  // (K, σ_k[, ψ]) per particle
+  state.row(0) = theta_.row(kK);
+  state.row(1) = theta_.row(kSigmaK);
+  if (with_psi) state.bottomRows(psi_.rows()) = psi_;
+  const Eigen::MatrixXd chol =
+      Eigen::LLT<Eigen::MatrixXd>(smc::proposal_covariance(state, Eigen::ArrayXd::Ones(P), 2.38 * stiffness_scale_)).matrixL();
+  const auto& prior = options_.prior;
+  // log p(K, σ_k, ψ | every kept truck's k) up to a constant: the uniform boxes and the trucks'
+  // stiffness densities (the newest truck's in full: its latents are in γ at every φ).
+  const auto log_density = [&](Eigen::Index i, const Eigen::VectorXd& x) {
+    if (!(x[0] >= prior.lo[kK] && x[0] <= prior.hi[kK] && x[1] >= prior.lo[kSigmaK] && x[1] <= prior.hi[kSigmaK])) return -kInf;
+    const double* psi = with_psi ? x.data() + 2 : psi_.col(i).data();
+    if (with_psi && !ext.in_prior(psi)) return -kInf;
+    return stiffness_log_density(i, x[0], x[1], psi, n);
+  };
+  std::vector<int> moved(static_cast<std::size_t>(P), 0);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    Eigen::VectorXd z(d);
+    for (Eigen::Index i = begin; i < end; ++i) {
+      smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+      Eigen::VectorXd x = state.col(i);
+      double lp = log_density(i, x);
+      for (int step = 0; step < kStiffnessSteps; ++step) {
+        for (Eigen::Index j = 0; j < d; ++j) z[j] = standard_normal(rng);
+        const Eigen::VectorXd y = x + chol * z;
+        const double lp_new = log_density(i, y);
+        if (std::log(uniform_open01(rng)) < lp_new - lp) {
+          x = y;
+          lp = lp_new;
+          ++moved[static_cast<std::size_t>(i)];
+        }
+      }
+      theta_(kK, i) = x[0];
+      theta_(kSigmaK, i) = x[1];
+      if (with_psi) psi_.col(i) = x.tail(psi_.rows());
+    }
+  });
+  // A serial reduction: the same whatever the threads.
+  double total = 0.0;
+  for (int m : moved) total += m;
+  stiffness_acceptance_ = total / static_cast<double>(P * kStiffnessSteps);
+  stiffness_scale_ = smc::tuned_scale_factor(stiffness_scale_, stiffness_acceptance_);
 }
 
 }  // namespace ssrfleet::fleet

@@ -47,8 +47,11 @@ class FleetTarget final : public smc::TemperedModel {
     // An optional model extension (DESIGN.md §6): its parameters ψ join θ in every particle,
     // drawn from their prior before the first truck, and move once the new truck is fully in by
     // `extension_sweeps` random-walk MH sweeps per stage, each re-simulating every kept truck
-    // (n passes per particle). Needs the exact regime (window 0): a retired truck's residuals
-    // cannot be recomputed at a new ψ. Not owned; must outlive the target.
+    // (n passes per particle). An extension that replaces the fleet's stiffness distribution
+    // (second_class) changes the density of every truck's k instead, and (K, σ_k, ψ) move by a
+    // random walk on their conditional, with no integrator call. Needs the exact regime
+    // (window 0): a retired truck's residuals cannot be recomputed at a new ψ. Not owned; must
+    // outlive the target.
     const ModelExtension* extension = nullptr;
     int extension_sweeps = 2;
   };
@@ -84,6 +87,7 @@ class FleetTarget final : public smc::TemperedModel {
   long long integrator_passes() const { return passes_; }
   double older_acceptance() const { return older_acceptance_; }
   double extension_acceptance() const { return extension_acceptance_; }
+  double stiffness_acceptance() const { return stiffness_acceptance_; }
 
   // Checkpoint: the particles and the data absorbed, exactly (binary_io.hpp). load() expects a
   // target built with the same site and options; DataError if the saved one does not fit.
@@ -112,8 +116,14 @@ class FleetTarget final : public smc::TemperedModel {
   // Running sums over every truck before the newest (retired and kept), per particle.
   enum Sum : int { kSumK = 0, kSumK2, kSumKt, kSumKt2, kSumZ, kSumZ2, kSumSsr, kSumCount };
 
-  double base_density(const HyperVector& theta, const double* sums,
-                      const double* newest_latents) const;
+  // log γ of particle i at θ with the newest truck's latents at newest_latents.
+  double base_density(Eigen::Index i, const HyperVector& theta, const double* newest_latents) const;
+  // log p(k, k_t, z | θ, ψ) of one truck, with the extension's stiffness distribution if it has one.
+  double latent_log_density(const double* latents, const HyperVector& theta, const double* psi) const;
+  // Whether the extension replaces the fleet's stiffness distribution (model_extension.hpp).
+  bool stiffness_edited() const;
+  // Σ over particle i's first `trucks` kept trucks of the extension's log p(k | mean, sd, ψ).
+  double stiffness_log_density(Eigen::Index i, double mean, double sd, const double* psi, Eigen::Index trucks) const;
   double newest_loglik(double ssr, double sigma_if) const;
   void recompute_sums(Eigen::Index particle);
   // One simulation: a truck at some latents (k, k_t, z); its SSR goes to *ssr_out.
@@ -135,6 +145,11 @@ class FleetTarget final : public smc::TemperedModel {
   void older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel, bool stiffness_from_prior);
   // One random-walk MH sweep over ψ of every particle at φ = 1 (every kept truck re-simulated).
   void extension_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
+  // With an extension's stiffness distribution (K, σ_k) have no standard conditional: they move,
+  // with ψ when ψ does not touch the forward model, by kStiffnessSteps random-walk MH steps per
+  // call on their conditional given every kept truck's k (no integrator call).
+  void stiffness_distribution_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
+  static constexpr int kStiffnessSteps = 3;
 
   const site::Site& site_;
   Options options_;
@@ -161,6 +176,8 @@ class FleetTarget final : public smc::TemperedModel {
   int extension_sweeps_done_ = 0;     // in the current stage
   double extension_scale_ = 1.0;      // adapted proposal multiplier of the ψ random walk
   double extension_acceptance_ = 0.0; // of the last ψ sweep
+  double stiffness_scale_ = 1.0;      // adapted proposal multiplier of the (K, σ_k, ψ) random walk
+  double stiffness_acceptance_ = 0.0; // of the last such sweep
   long long passes_ = 0;
 };
 

@@ -6,6 +6,7 @@
 #include <map>
 #include <sstream>
 
+#include "fleet/fleet_model.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::fleet {
@@ -41,6 +42,19 @@ double ModelExtension::log_prior(const double* psi) const {
   double lp = 0.0;
   for (const auto& p : parameters()) lp -= std::log(p.hi - p.lo);
   return lp;
+}
+
+double ModelExtension::log_stiffness_density(const double* /*psi*/, double k, double mean_npm, double sd_npm) const {
+  return log_normal_density(k, mean_npm, sd_npm);
+}
+
+double ModelExtension::stiffness_cdf(const double* /*psi*/, double k, double mean_npm, double sd_npm) const {
+  return normal_cdf((k - mean_npm) / sd_npm);
+}
+
+double ModelExtension::draw_stiffness(const double* /*psi*/, double mean_npm, double sd_npm, double /*uniform*/,
+                                      double standard_normal) const {
+  return mean_npm + sd_npm * standard_normal;
 }
 
 ExtensionRegistrar::ExtensionRegistrar(std::string name, ExtensionFactory factory) {

@@ -5,12 +5,15 @@
 // evidence (lib/discrepancy).
 //
 // An extension changes the forward model through up to three hooks, applied in this order to
-// every simulated pass:
+// every simulated pass (edits_forward() says whether it has any):
 //   edit_pass    the pass's inputs (vehicle constants, the speed the car really drove at);
 //   add_profile  a height added to every wheel path (the same at every lateral position), e.g. a
 //                local defect missing from the road file; the system is linear, so its effect is
 //                simulated on its own and added (extended_forward.cpp);
 //   edit_output  what the sensors report (e.g. a calibration gain).
+// It may also change the fleet model, the distribution of the suspension stiffness k across
+// trucks (edits_stiffness_distribution, e.g. a second class of trucks): the fleet target then
+// uses its density and draws, and the simulator lets it edit each simulated truck.
 // Each catalogue entry lives in one file under lib/discrepancy/extensions/ and registers itself
 // with ExtensionRegistrar, so adding an effect is one new file.
 #pragma once
@@ -23,6 +26,7 @@
 
 #include <Eigen/Core>
 
+#include "fleet/truck.hpp"
 #include "site/site.hpp"
 
 namespace ssrfleet::fleet {
@@ -36,10 +40,12 @@ enum class CheckKind : int {
   kMass,             // residuals against sprung mass
   kLateral,          // residuals against the lateral position
   kAutocorrelation,  // lag-1 autocorrelation of residuals along the sensor array
+  kStiffnessDistribution,  // the trucks' suspension stiffnesses against the fleet distribution
   kCount
 };
-inline constexpr std::string_view kCheckNames[] = {"sensor_mean",   "sensor_dispersion", "speed",
-                                                   "mass",          "lateral",           "autocorrelation"};
+inline constexpr std::string_view kCheckNames[] = {"sensor_mean", "sensor_dispersion", "speed",
+                                                   "mass",        "lateral",           "autocorrelation",
+                                                   "stiffness_distribution"};
 inline std::string_view check_name(CheckKind c) { return kCheckNames[static_cast<int>(c)]; }
 
 struct ExtensionParameter {
@@ -79,6 +85,25 @@ class ModelExtension {
   virtual void add_profile(const double* /*psi*/, double /*dx_m*/, Eigen::Ref<Eigen::ArrayXd> /*profile*/) const {}
   // impact_factor: one pass's model IF at the site's sensors, edited in place.
   virtual void edit_output(const double* /*psi*/, Eigen::Ref<Eigen::ArrayXd> /*impact_factor*/) const {}
+  // False when none of the three hooks above does anything, so a pass needs no extended forward
+  // model and ψ can move without re-simulating a truck.
+  virtual bool edits_forward() const { return true; }
+
+  // The fleet model: k ~ N(K, σ_k²) across trucks in the base model. An extension that replaces
+  // that distribution overrides all four of the following consistently.
+  virtual bool edits_stiffness_distribution() const { return false; }
+  // log p(k | K, σ_k, ψ).
+  virtual double log_stiffness_density(const double* psi, double k, double mean_npm, double sd_npm) const;
+  // P(K ≤ k | K, σ_k, ψ): the checks compare the trucks' k with it.
+  virtual double stiffness_cdf(const double* psi, double k, double mean_npm, double sd_npm) const;
+  // A draw of k from p(k | K, σ_k, ψ) made from a uniform on [0, 1) and an independent standard
+  // normal, so the caller's random stream decides.
+  virtual double draw_stiffness(const double* psi, double mean_npm, double sd_npm, double uniform,
+                                double standard_normal) const;
+  // Simulation: turns a truck drawn from the base fleet (simulator.hpp) into one of the extended
+  // fleet, from a uniform and a standard normal of its own (e.g. moves it to the second class).
+  virtual void edit_simulated_truck(const double* /*psi*/, Truck& /*truck*/, double /*uniform*/,
+                                    double /*standard_normal*/) const {}
 
   Eigen::Index dim() const { return static_cast<Eigen::Index>(parameters().size()); }
   bool in_prior(const double* psi) const;

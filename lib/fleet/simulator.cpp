@@ -6,6 +6,7 @@
 
 #include <boost/random/mersenne_twister.hpp>
 #include <boost/random/normal_distribution.hpp>
+#include <boost/random/uniform_01.hpp>
 
 #include "fleet/extended_forward.hpp"
 #include "util/errors.hpp"
@@ -43,6 +44,7 @@ void check_trucks(const site::Site& site, const std::vector<Truck>& trucks, doub
 // Records from the model output plus noise; the noise has a stream of its own, so adding it
 // never changes which fleet a seed draws.
 void add_records(SimulatedLog& log, const std::vector<Truck>& trucks, double noise_sd, std::uint64_t seed) {
+  log.trucks = trucks;
   log.lift_offs = static_cast<int>((log.min_if < 0.0).count());
   boost::random::mt19937_64 engine(seed ^ 0x6e6f697365ULL /* "noise" */);
   boost::random::normal_distribution<double> noise(0.0, 1.0);
@@ -78,16 +80,28 @@ SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& truc
   if (static_cast<Eigen::Index>(psi.size()) != extension.dim() || !extension.in_prior(psi.data())) {
     throw UsageError("simulate: parameters of effect '" + extension.name() + "' are missing or outside their range");
   }
+  // A fleet-model effect edits the trucks first, each with draws of its own from a stream of the
+  // seed's (neither the fleet's nor the noise's, so a seed draws the same base fleet and noise).
+  std::vector<Truck> edited = trucks;
+  if (extension.edits_stiffness_distribution()) {
+    boost::random::mt19937_64 engine(seed ^ 0x636c6173736573ULL /* "classes" */);
+    boost::random::uniform_01<double> uniform;
+    boost::random::normal_distribution<double> normal(0.0, 1.0);
+    for (auto& t : edited) {
+      const double u = uniform(engine);
+      extension.edit_simulated_truck(psi.data(), t, u, normal(engine));
+    }
+  }
   std::vector<ExtendedPass> passes;
-  passes.reserve(trucks.size());
-  for (const auto& t : trucks) {
+  passes.reserve(edited.size());
+  for (const auto& t : edited) {
     passes.push_back({base_pass(site, t.speed_mps, t.sprung_mass_kg, t.stiffness_npm, t.tyre_stiffness_npm, t.lateral_m),
                       psi.data()});
   }
   SimulatedLog log;
   log.model_if.resize(site.sensors(), static_cast<Eigen::Index>(trucks.size()));
   simulate_passes(site, &extension, passes, log.model_if, &log.min_if);
-  add_records(log, trucks, noise_sd, seed);
+  add_records(log, edited, noise_sd, seed);
   return log;
 }
 

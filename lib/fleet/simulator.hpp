@@ -16,6 +16,7 @@ namespace ssrfleet::fleet {
 
 struct SimulatedLog {
   std::vector<io::WimRecord> records;   // what the WIM system would log
+  std::vector<Truck> trucks;            // as they drove (after a fleet-model effect's edits)
   Eigen::ArrayXXd model_if;             // noise-free model IF, sensors x trucks
   Eigen::ArrayXd min_if;                // per truck, minimum IF over the pass
   int lift_offs = 0;                    // trucks whose tyre force went negative somewhere
@@ -28,7 +29,8 @@ SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& truc
 
 // The same with a model extension switched on at parameters psi (model_extension.hpp): data in
 // which the effect is present. A truck's speed is the one the WIM system logs (with speed_bias
-// the car really drove at another). min_if leaves out an added profile's own effect.
+// the car really drove at another). min_if leaves out an added profile's own effect. An effect on
+// the fleet model (edits_stiffness_distribution) edits each truck before it drives.
 SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd,
                           std::uint64_t seed, const ModelExtension& extension, const std::vector<double>& psi);
 

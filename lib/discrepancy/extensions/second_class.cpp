@@ -1,0 +1,67 @@
+// second_class: the fleet is two classes of truck, the second (a share w of the trucks, e.g. air
+// instead of steel suspensions) with its own suspension stiffness distribution N(K2, σ_k2²):
+//   k ~ (1 - w) N(K, σ_k²) + w N(K2, σ_k2²).
+// It changes the fleet model only; the quarter car is the base model's. w ≤ 0.5 names the second
+// class as the minority, which keeps the two classes from swapping labels.
+#include <algorithm>
+#include <cmath>
+
+#include "fleet/fleet_model.hpp"
+#include "fleet/model_extension.hpp"
+
+namespace ssrfleet::fleet {
+namespace {
+
+enum : int { kShare = 0, kMean2, kSd2 };
+
+class SecondClass final : public ModelExtension {
+ public:
+  explicit SecondClass(const site::Site& /*site*/) {
+    // The class's stiffness prior is the base model's for K and σ_k (DESIGN.md §3). At share 0 the
+    // extension is the base model whatever K2 and σ_k2 are; their null values are Table 1's.
+    const PriorBounds base;
+    params_ = {{"share", "", 0.0, 0.5, 0.0},
+               {"K2", "N/m", base.lo[kK], base.hi[kK], 500e3},
+               {"sigma_k2", "N/m", base.lo[kSigmaK], base.hi[kSigmaK], 50e3}};
+  }
+  std::string name() const override { return "second_class"; }
+  std::string description() const override {
+    return "a second class of trucks with its own suspension stiffness distribution";
+  }
+  const std::vector<ExtensionParameter>& parameters() const override { return params_; }
+  // Each truck's own k absorbs a wrong fleet distribution, so the residuals show nothing; the
+  // trucks' fitted stiffnesses do not look like draws from N(K, σ_k²).
+  std::vector<CheckKind> signature() const override { return {CheckKind::kStiffnessDistribution}; }
+  bool edits_forward() const override { return false; }
+
+  bool edits_stiffness_distribution() const override { return true; }
+  double log_stiffness_density(const double* psi, double k, double mean_npm, double sd_npm) const override {
+    const double first = log_normal_density(k, mean_npm, sd_npm);
+    if (psi[kShare] <= 0.0) return first;
+    const double a = std::log1p(-psi[kShare]) + first;
+    const double b = std::log(psi[kShare]) + log_normal_density(k, psi[kMean2], psi[kSd2]);
+    const double top = std::max(a, b);
+    return top + std::log(std::exp(a - top) + std::exp(b - top));
+  }
+  double stiffness_cdf(const double* psi, double k, double mean_npm, double sd_npm) const override {
+    return (1.0 - psi[kShare]) * normal_cdf((k - mean_npm) / sd_npm) + psi[kShare] * normal_cdf((k - psi[kMean2]) / psi[kSd2]);
+  }
+  double draw_stiffness(const double* psi, double mean_npm, double sd_npm, double uniform,
+                        double standard_normal) const override {
+    return uniform < psi[kShare] ? psi[kMean2] + psi[kSd2] * standard_normal : mean_npm + sd_npm * standard_normal;
+  }
+  void edit_simulated_truck(const double* psi, Truck& truck, double uniform, double standard_normal) const override {
+    if (uniform >= psi[kShare]) return;
+    // A non-physical draw (possible only when σ_k2 is a large part of K2) keeps the base class's k.
+    const double k = psi[kMean2] + psi[kSd2] * standard_normal;
+    if (k > 0.0) truck.stiffness_npm = k;
+  }
+
+ private:
+  std::vector<ExtensionParameter> params_;
+};
+
+const ExtensionRegistrar registrar("second_class", [](const site::Site& site) { return std::make_unique<SecondClass>(site); });
+
+}  // namespace
+}  // namespace ssrfleet::fleet
