@@ -114,6 +114,27 @@ TEST_CASE("profile_defect equals a road with the enveloped bump added to every l
   CHECK(worst_difference(base, "profile_defect:position=84.3,length=0.5,height=0.01", base, trucks) > 0.02);
 }
 
+TEST_CASE("profile_defect's jump is symmetric: the mirrored draws bring psi back", "[discrepancy][extension]") {
+  const site::Site site(site::load_road("AS1"), site::SiteOptions{});
+  const auto effect = fleet::parse_extension_setting("profile_defect:position=84.3,length=0.5,height=0.01", site);
+  const fleet::ModelExtension& ext = *effect.extension;
+  REQUIRE(ext.jump_draws() == 2);
+  const auto& length = ext.parameters()[1];
+  for (const double u0 : {0.1, 0.5, 0.93}) {
+    const double u[2] = {u0, 0.37};
+    double there[3], back[3];
+    ext.jump(effect.psi.data(), u, there);
+    CHECK(there[2] == -0.01);  // a bump becomes a dip
+    CHECK(std::abs(there[0] - 84.3) <= 1.5);
+    // The reverse move: the opposite shift, and the old length redrawn.
+    const double reverse[2] = {1.0 - u0, (0.5 - length.lo) / (length.hi - length.lo)};
+    ext.jump(there, reverse, back);
+    CHECK(back[0] == Approx(84.3).epsilon(1e-14));
+    CHECK(back[1] == Approx(0.5).epsilon(1e-14));
+    CHECK(back[2] == 0.01);
+  }
+}
+
 TEST_CASE("second_class: its stiffness density, CDF and draws describe one two-class fleet", "[discrepancy][extension]") {
   const site::Site site(site::load_road("AS1"), site::SiteOptions{});
   const auto effect = fleet::parse_extension_setting("second_class:share=0.3,K2=1000000,sigma_k2=100000", site);

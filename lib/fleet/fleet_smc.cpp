@@ -15,6 +15,7 @@ FleetTarget::Options target_options(const FleetSmc::Options& o) {
   t.window = o.window;
   t.extension = o.extension;
   t.extension_sweeps = o.extension_sweeps;
+  t.extension_jump_sweeps = o.extension_jump_sweeps;
   return t;
 }
 

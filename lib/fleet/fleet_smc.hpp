@@ -36,7 +36,8 @@ class FleetSmc {
     Eigen::Index window = 0;  // FleetTarget::Options::window: 0 = exact, W = bounded memory
     // FleetTarget::Options::extension: an effect fitted alongside θ (not owned; outlives this).
     const ModelExtension* extension = nullptr;
-    int extension_sweeps = 2;
+    int extension_sweeps = 3;       // FleetTarget::Options::extension_sweeps
+    int extension_jump_sweeps = 1;  // FleetTarget::Options::extension_jump_sweeps
   };
 
   // UsageError on invalid options (the sampler's IsValid message).

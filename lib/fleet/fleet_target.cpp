@@ -47,6 +47,7 @@ FleetTarget::FleetTarget(const site::Site& site, Options options)
     throw UsageError("fleet target: a model extension needs the exact regime (window 0)");
   }
   if (options_.extension_sweeps < 0) throw UsageError("fleet target: extension_sweeps must be >= 0");
+  if (options_.extension_jump_sweeps < 0) throw UsageError("fleet target: extension_jump_sweeps must be >= 0");
   theta_.resize(kHyperCount, options_.particles);
   psi_.resize(options_.extension != nullptr ? options_.extension->dim() : 0, options_.particles);
   sums_ = Eigen::MatrixXd::Zero(kSumCount, options_.particles);
@@ -334,12 +335,18 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
     older_trucks_sweep(rngs.child(1), parallel, older_sweeps_done_ % 2 == 1);
     ++older_sweeps_done_;
   }
-  if (phi == 1.0 && options_.extension != nullptr && options_.extension->edits_forward() &&
-      extension_sweeps_done_ < options_.extension_sweeps) {
-    extension_sweep(rngs.child(2), parallel);
-    ++extension_sweeps_done_;
+  if (phi == 1.0 && options_.extension != nullptr && options_.extension->edits_forward()) {
+    // Per stage: the jump sweeps (if the extension has a jump), then the random-walk sweeps.
+    const int jumps = options_.extension->jump_draws() > 0 ? options_.extension_jump_sweeps : 0;
+    if (extension_sweeps_done_ < jumps) {
+      extension_sweep(rngs.child(3), parallel, PsiMove::kJump);
+      ++extension_sweeps_done_;
+    } else if (extension_sweeps_done_ < jumps + options_.extension_sweeps) {
+      extension_sweep(rngs.child(2), parallel, PsiMove::kRandomWalk);
+      ++extension_sweeps_done_;
+    }
   }
-  if (stiffness_edited()) stiffness_distribution_sweep(rngs.child(3), parallel);
+  if (stiffness_edited()) stiffness_distribution_sweep(rngs.child(4), parallel);
   const Eigen::Index newest = kept_trucks() - 1;
   const double n_all = static_cast<double>(trucks());  // the newest truck's latents are in γ in full
   const auto& prior = options_.prior;
@@ -568,7 +575,7 @@ void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::Par
   older_acceptance_ = total / static_cast<double>(older);
 }
 
-void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel) {
+void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel, PsiMove move) {
   const Eigen::Index P = options_.particles, n = kept_trucks(), d = psi_.rows();
   const ModelExtension& ext = *options_.extension;
   // Proposal: the cloud's spread of ψ (equal weights), 2.38/√d, times a multiplier adapted on
@@ -587,9 +594,15 @@ void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::Parall
   std::vector<char> inside(static_cast<std::size_t>(P), 0);
   for (Eigen::Index i = 0; i < P; ++i) {
     smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
-    Eigen::VectorXd z(d);
-    for (Eigen::Index j = 0; j < d; ++j) z[j] = standard_normal(rng);
-    proposals.col(i) = psi_.col(i) + chol * z;
+    if (move == PsiMove::kJump) {
+      std::vector<double> u(static_cast<std::size_t>(ext.jump_draws()));
+      for (double& v : u) v = smc::uniform01(rng);
+      ext.jump(psi_.col(i).data(), u.data(), proposals.col(i).data());
+    } else {
+      Eigen::VectorXd z(d);
+      for (Eigen::Index j = 0; j < d; ++j) z[j] = standard_normal(rng);
+      proposals.col(i) = psi_.col(i) + chol * z;
+    }
     log_u[i] = std::log(uniform_open01(rng));
     inside[static_cast<std::size_t>(i)] = ext.in_prior(proposals.col(i).data()) ? 1 : 0;
   }
@@ -626,6 +639,10 @@ void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::Parall
       recompute_sums(i);
       ++moved;
     }
+  }
+  if (move == PsiMove::kJump) {  // the random walk's scale adapts on its own acceptance only
+    extension_jump_acceptance_ = static_cast<double>(moved) / static_cast<double>(P);
+    return;
   }
   extension_acceptance_ = static_cast<double>(moved) / static_cast<double>(P);
   extension_scale_ = smc::tuned_scale_factor(extension_scale_, extension_acceptance_);

@@ -105,6 +105,15 @@ class ModelExtension {
   virtual void edit_simulated_truck(const double* /*psi*/, Truck& /*truck*/, double /*uniform*/,
                                     double /*standard_normal*/) const {}
 
+  // Optional: a jump between modes of ψ that are far apart and that the data tell apart only
+  // slowly (aliases). The fleet target's random walk, scaled on the particle cloud, cannot cross
+  // from one to the other once the cloud has settled in one of them, so it mixes this proposal
+  // in (FleetTarget::Options::extension_jump_sweeps). `u` holds jump_draws() uniforms on [0, 1);
+  // the proposal must be symmetric: ψ' as likely from ψ as ψ from ψ' (it may leave the prior
+  // box; such proposals are rejected).
+  virtual int jump_draws() const { return 0; }  // 0: no jump
+  virtual void jump(const double* /*psi*/, const double* /*u*/, double* /*psi_out*/) const {}
+
   Eigen::Index dim() const { return static_cast<Eigen::Index>(parameters().size()); }
   bool in_prior(const double* psi) const;
   // The uniform prior's log density (the normalised box), -inf outside.

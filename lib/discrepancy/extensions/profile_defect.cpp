@@ -13,6 +13,8 @@ namespace ssrfleet::fleet {
 namespace {
 
 class ProfileDefect final : public ModelExtension {
+  static constexpr double kJumpShift = 1.5;  // m
+
  public:
   explicit ProfileDefect(const site::Site& site) : envelopment_m_(site.options().envelopment_m) {
     const auto& x = site.sensor_positions_m();
@@ -26,6 +28,17 @@ class ProfileDefect final : public ModelExtension {
   const std::vector<ExtensionParameter>& parameters() const override { return params_; }
   std::vector<CheckKind> signature() const override {
     return {CheckKind::kSensorMean, CheckKind::kSensorDispersion, CheckKind::kAutocorrelation};
+  }
+  // Alias: the truck answers a short defect with a decaying wheel-hop oscillation (about 2 m long
+  // at highway speed), so a dip a fraction of that wavelength downstream of a bump (or the other
+  // way round) fits the sensors after it almost as well, and early trucks may prefer it. The jump
+  // flips the sign, shifts the position by up to kJumpShift either way and redraws the length
+  // from its prior: symmetric, since the reverse jump flips back with the opposite shift.
+  int jump_draws() const override { return 2; }
+  void jump(const double* psi, const double* u, double* out) const override {
+    out[0] = psi[0] + kJumpShift * (2.0 * u[0] - 1.0);
+    out[1] = params_[1].lo + (params_[1].hi - params_[1].lo) * u[1];
+    out[2] = -psi[2];
   }
   bool adds_profile() const override { return true; }
   void add_profile(const double* psi, double dx_m, Eigen::Ref<Eigen::ArrayXd> profile) const override {
