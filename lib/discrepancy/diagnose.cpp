@@ -170,9 +170,8 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<io::WimRecord>
 
   // The choice. Evidence first; but two effects whose log Bayes factors differ by less than the
   // threshold are not told apart by it (the same threshold that separates an effect from the
-  // base model), and then held-out skill decides: a bump just before a sensor and a low gain on
-  // that sensor, for one, fit 100 trucks about equally well (log Bayes factors 635.6 and 636.6).
-  // The others within the threshold are reported as alternatives.
+  // base model), and then held-out skill decides; the others within the threshold are reported
+  // as alternatives.
   std::size_t chosen = supported.size();
   double best_bf = -std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < supported.size(); ++k) best_bf = std::max(best_bf, r.candidates[supported_index[k]].log_bayes_factor);
