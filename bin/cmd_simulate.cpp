@@ -37,7 +37,7 @@ int run_simulate(int argc, const char* const argv[]) {
       ("noise", po::value(&noise)->default_value(noise), "measurement noise sd sigma_IF; 0 = exact model output")
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (fleet draw and noise)")
       ("out,o", po::value(&out)->default_value(out), "WIM log to write ('-' = standard output)")
-      ("truth", po::value(&truth), "also write the simulated trucks (truck-list CSV) here")
+      ("truth", po::value(&truth), "also write the simulated trucks as they drove (truck-list CSV; with second_class, its stiffnesses) here")
       ("effect", po::value(&effect),
        "switch on an effect the base model leaves out, NAME:param=value,... (e.g. sensor_gain:sensor=5,gain=1.05; "
        "see `ssrfleet diagnose --help` for the catalogue)")
