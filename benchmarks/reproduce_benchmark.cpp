@@ -129,14 +129,24 @@ int main(int argc, char** argv) {
     const auto d3 = stats([](const reproduce::Result& r) { return r.fig9.at(1).max_abs_mean_diff; });
     const auto p2 = stats([](const reproduce::Result& r) { return r.fig9.at(0).max_abs_population_diff; });
     const auto p3 = stats([](const reproduce::Result& r) { return r.fig9.at(1).max_abs_population_diff; });
+    const auto o2 = stats([](const reproduce::Result& r) { return r.fig9.at(0).max_abs_oracle_diff; });
+    const auto o3 = stats([](const reproduce::Result& r) { return r.fig9.at(1).max_abs_oracle_diff; });
+    const auto h2 = stats([](const reproduce::Result& r) { return r.fig9.at(0).max_band_half_width; });
+    const auto h3 = stats([](const reproduce::Result& r) { return r.fig9.at(1).max_band_half_width; });
     const auto wall = stats([](const reproduce::Result& r) { return r.total_wall_s; });
-    int within2 = 0, within3 = 0, peak = 0, pop2 = 0, pop3 = 0;
+    int within2 = 0, within3 = 0, peak = 0, pop2 = 0, pop3 = 0, oracle2 = 0, oracle3 = 0;
+    long band2 = 0, band3 = 0, sensors = 0;
     for (const auto& r : runs) {
       within2 += r.fig9.at(0).max_abs_mean_diff <= 0.01;
       within3 += r.fig9.at(1).max_abs_mean_diff <= 0.01;
       peak += r.fig8_predicted_peak == r.fig8_observed_peak;
       pop2 += r.fig9.at(0).max_abs_population_diff <= 0.01;
       pop3 += r.fig9.at(1).max_abs_population_diff <= 0.01;
+      oracle2 += r.fig9.at(0).max_abs_oracle_diff <= 0.01;
+      oracle3 += r.fig9.at(1).max_abs_oracle_diff <= 0.01;
+      band2 += r.fig9.at(0).band_covers_population;
+      band3 += r.fig9.at(1).band_covers_population;
+      sensors += r.fig9.at(0).sensors;
     }
     const auto row = [&](const std::string& what, const std::array<double, 3>& v, double scale, int prec) {
       md << "| " << what << " | " << std::fixed << std::setprecision(prec) << scale * v[0] << " | " << scale * v[1]
@@ -149,17 +159,31 @@ int main(int argc, char** argv) {
     row("Fig. 9 AS3 largest abs. mean difference", d3, 1, 4);
     row("Fig. 9 AS2 largest abs. difference from the population mean", p2, 1, 4);
     row("Fig. 9 AS3 largest abs. difference from the population mean", p3, 1, 4);
+    row("Fig. 9 AS2 largest abs. difference, population mean vs new fleet (a perfect predictor)", o2, 1, 4);
+    row("Fig. 9 AS3 largest abs. difference, population mean vs new fleet (a perfect predictor)", o3, 1, 4);
+    row("Fig. 9 AS2 widest half-width of the 95 % band of the mean", h2, 1, 4);
+    row("Fig. 9 AS3 widest half-width of the 95 % band of the mean", h3, 1, 4);
     row("wall time per reproduction (s)", wall, 1, 1);
     md << "\nAS2 mean within 0.01 IF at every sensor: " << within2 << " of " << runs.size()
        << "; AS3: " << within3 << " of " << runs.size() << "; Fig. 8 highest-mean sensor among 11-16 right: " << peak
        << " of " << runs.size() << ".\nAgainst the true fleet's population mean (20000 trucks): AS2 within 0.01 at every sensor "
-       << pop2 << " of " << runs.size() << ", AS3 " << pop3 << " of " << runs.size() << ".\n\n";
+       << pop2 << " of " << runs.size() << ", AS3 " << pop3 << " of " << runs.size()
+       << ".\nA perfect predictor (the population mean) within 0.01 of the new fleet's mean at every sensor: AS2 " << oracle2
+       << " of " << runs.size() << ", AS3 " << oracle3 << " of " << runs.size()
+       << ".\nThe 95 % band of the predicted mean holds the population mean at " << band2 << " of " << sensors
+       << " sensor-runs on AS2 and " << band3 << " of " << sensors << " on AS3.\n\n";
     entry["fig7_coverage"] = {{"mean", c7[0]}, {"min", c7[1]}, {"max", c7[2]}};
     entry["fig8_coverage"] = {{"mean", c8[0]}, {"min", c8[1]}, {"max", c8[2]}};
     entry["fig9_as2_max_abs_mean_diff"] = {{"mean", d2[0]}, {"min", d2[1]}, {"max", d2[2]}, {"within_0.01", within2}};
     entry["fig9_as3_max_abs_mean_diff"] = {{"mean", d3[0]}, {"min", d3[1]}, {"max", d3[2]}, {"within_0.01", within3}};
     entry["fig9_as2_max_abs_population_diff"] = {{"mean", p2[0]}, {"min", p2[1]}, {"max", p2[2]}, {"within_0.01", pop2}};
     entry["fig9_as3_max_abs_population_diff"] = {{"mean", p3[0]}, {"min", p3[1]}, {"max", p3[2]}, {"within_0.01", pop3}};
+    entry["fig9_as2_max_abs_oracle_diff"] = {{"mean", o2[0]}, {"min", o2[1]}, {"max", o2[2]}, {"within_0.01", oracle2}};
+    entry["fig9_as3_max_abs_oracle_diff"] = {{"mean", o3[0]}, {"min", o3[1]}, {"max", o3[2]}, {"within_0.01", oracle3}};
+    entry["fig9_as2_band"] = {{"max_half_width", {{"mean", h2[0]}, {"min", h2[1]}, {"max", h2[2]}}},
+                              {"holds_population_mean", band2}, {"sensor_runs", sensors}};
+    entry["fig9_as3_band"] = {{"max_half_width", {{"mean", h3[0]}, {"min", h3[1]}, {"max", h3[2]}}},
+                              {"holds_population_mean", band3}, {"sensor_runs", sensors}};
     entry["fig8_peak_right"] = peak;
     entry["wall_s"] = {{"mean", wall[0]}, {"min", wall[1]}, {"max", wall[2]}};
     report["runs"].push_back(entry);

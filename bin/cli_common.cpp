@@ -12,7 +12,7 @@ namespace ssrfleet::cli {
 
 void SiteFlags::add_to(po::options_description& desc) {
   desc.add_options()
-      ("envelopment", po::value(&envelopment_m)->default_value(envelopment_m),
+      ("envelopment", po::value(&envelopment_m)->default_value(envelopment_m, shortest_text(envelopment_m)),
        "tyre envelopment: moving-average base length along travel (m); 0 = off")
       ("sensors", po::value(&sensors)->default_value(sensors),
        "sensor array as FIRST_M,SPACING_M,COUNT")
@@ -45,6 +45,12 @@ site::SiteOptions SiteFlags::to_options() const {
   }
   o.validate();
   return o;
+}
+
+std::string shortest_text(double value) {
+  char buffer[32];
+  const auto end = std::to_chars(buffer, buffer + sizeof buffer, value).ptr;
+  return std::string(buffer, end);
 }
 
 bool parse_or_help(int argc, const char* const argv[], const po::options_description& desc,

@@ -34,6 +34,10 @@ bool parse_or_help(int argc, const char* const argv[], const po::options_descrip
                    const po::positional_options_description* positional, po::variables_map& vm,
                    const std::string& usage_line);
 
+// A number as --help should show its default: the shortest text that reads back to it ("0.3",
+// where program_options' own conversion prints "0.29999999999999999").
+std::string shortest_text(double value);
+
 // Parses a seed: a whole number in [0, 2^64). Anything else is a UsageError naming the option.
 std::uint64_t parse_seed(const std::string& text, const std::string& option = "--seed");
 

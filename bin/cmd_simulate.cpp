@@ -44,17 +44,18 @@ int run_simulate(int argc, const char* const argv[]) {
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   site_flags.add_to(desc);
   po::options_description fleet_desc("fleet distribution (paper Table 1 defaults)");
+  const auto number = [](double& value) { return po::value(&value)->default_value(value, shortest_text(value)); };
   fleet_desc.add_options()
-      ("m2-mean", po::value(&dist.sprung_mass_kg.mean)->default_value(dist.sprung_mass_kg.mean), "sprung mass mean (kg)")
-      ("m2-sd", po::value(&dist.sprung_mass_kg.sd)->default_value(dist.sprung_mass_kg.sd), "sprung mass sd (kg)")
-      ("k-mean", po::value(&dist.stiffness_npm.mean)->default_value(dist.stiffness_npm.mean), "suspension stiffness mean (N/m)")
-      ("k-sd", po::value(&dist.stiffness_npm.sd)->default_value(dist.stiffness_npm.sd), "suspension stiffness sd (N/m)")
-      ("kt-mean", po::value(&dist.tyre_stiffness_npm.mean)->default_value(dist.tyre_stiffness_npm.mean), "tyre stiffness mean (N/m)")
-      ("kt-sd", po::value(&dist.tyre_stiffness_npm.sd)->default_value(dist.tyre_stiffness_npm.sd), "tyre stiffness sd (N/m)")
-      ("speed-mean", po::value(&dist.speed_mps.mean)->default_value(dist.speed_mps.mean), "speed mean (m/s)")
-      ("speed-sd", po::value(&dist.speed_mps.sd)->default_value(dist.speed_mps.sd), "speed sd (m/s)")
-      ("z-mean", po::value(&dist.lateral_m.mean)->default_value(dist.lateral_m.mean), "lateral position mean (m)")
-      ("z-sd", po::value(&dist.lateral_m.sd)->default_value(dist.lateral_m.sd), "lateral position sd (m)");
+      ("m2-mean", number(dist.sprung_mass_kg.mean), "sprung mass mean (kg)")
+      ("m2-sd", number(dist.sprung_mass_kg.sd), "sprung mass sd (kg)")
+      ("k-mean", number(dist.stiffness_npm.mean), "suspension stiffness mean (N/m)")
+      ("k-sd", number(dist.stiffness_npm.sd), "suspension stiffness sd (N/m)")
+      ("kt-mean", number(dist.tyre_stiffness_npm.mean), "tyre stiffness mean (N/m)")
+      ("kt-sd", number(dist.tyre_stiffness_npm.sd), "tyre stiffness sd (N/m)")
+      ("speed-mean", number(dist.speed_mps.mean), "speed mean (m/s)")
+      ("speed-sd", number(dist.speed_mps.sd), "speed sd (m/s)")
+      ("z-mean", number(dist.lateral_m.mean), "lateral position mean (m)")
+      ("z-sd", number(dist.lateral_m.sd), "lateral position sd (m)");
   desc.add(fleet_desc);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, nullptr, vm,

@@ -3,6 +3,7 @@
 #include <sstream>
 #include <thread>
 
+#include "cli_common.hpp"
 #include "fit_methods.hpp"
 #include "fleet/fleet_smc.hpp"
 #include "util/errors.hpp"
@@ -18,7 +19,7 @@ void FitFlags::add_to(po::options_description& desc) {
       ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
       ("older-sweeps", po::value(&older_sweeps)->default_value(older_sweeps),
        "MH sweeps over every older truck's latents after each new truck (0 = off)")
-      ("cess", po::value(&cess_target)->default_value(cess_target), "conditional-ESS target of each tempering step, in (0, 1)")
+      ("cess", po::value(&cess_target)->default_value(cess_target, shortest_text(cess_target)), "conditional-ESS target of each tempering step, in (0, 1)")
       ("max-sweeps", po::value(&max_sweeps)->default_value(max_sweeps), "MCMC sweeps per tempering step at most")
       ("window", po::value(&window)->default_value(window),
        "keep and move only the last W trucks' latents per particle; older ones as sufficient statistics (0 = exact)")

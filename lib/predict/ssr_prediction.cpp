@@ -1,5 +1,6 @@
 #include "predict/ssr_prediction.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -10,6 +11,7 @@
 #include <boost/random/uniform_int_distribution.hpp>
 
 #include "fleet/fleet_model.hpp"
+#include "fleet/truncated_samplers.hpp"
 #include "util/errors.hpp"
 #include "util/quantile.hpp"
 
@@ -40,13 +42,19 @@ std::vector<Eigen::Index> draw_by_weight(const Eigen::ArrayXd& w, int n, double 
   return idx;
 }
 
+// T uniforms, one in each stratum [t/T, (t+1)/T), in random order: one axis of a Latin
+// hypercube. Each value is still uniform on (0, 1) (so every simulated truck keeps its exact
+// distribution), but the T values together cover the axis evenly. The shuffle is a hand-written
+// Fisher-Yates on boost's portable distribution, so the order is the same on every platform.
 template <class Engine>
-double positive_normal(Engine& e, double mean, double sd) {
-  boost::random::normal_distribution<double> n(mean, sd);
-  for (;;) {
-    const double x = n(e);
-    if (x > 0.0) return x;
+std::vector<double> stratified_uniforms(Engine& engine, int T) {
+  std::vector<double> u(static_cast<std::size_t>(T));
+  for (int t = 0; t < T; ++t) u[static_cast<std::size_t>(t)] = (t + fleet::uniform_open01(engine)) / T;
+  for (int t = T - 1; t > 0; --t) {
+    boost::random::uniform_int_distribution<int> pick(0, t);
+    std::swap(u[static_cast<std::size_t>(t)], u[static_cast<std::size_t>(pick(engine))]);
   }
+  return u;
 }
 }  // namespace
 
@@ -66,12 +74,13 @@ SsrPrediction predict_ssr(const fleet::PosteriorCloud& posterior, const site::Si
   boost::random::uniform_01<double> unif;
   boost::random::normal_distribution<double> std_normal(0.0, 1.0);
   const auto thetas = draw_by_weight(posterior.weights, R, unif(engine));
-  boost::random::uniform_int_distribution<std::size_t> pick_truck(0, posterior.speed_mps.size() - 1);
+  const std::size_t n_obs = posterior.speed_mps.size();
   const double zlo = site.lateral_min_m(), zhi = site.lateral_max_m();
 
   site::TruckBatch batch;
   batch.resize(static_cast<Eigen::Index>(R) * T);
   Eigen::ArrayXd sigma_if(R);
+  std::vector<double> traffic_cdf;  // cumulative bootstrap weights of the observed trucks
   for (int r = 0; r < R; ++r) {
     const Eigen::Index p = thetas[static_cast<std::size_t>(r)];
     const auto th = [&](int j) { return posterior.theta(j, p); };
@@ -81,17 +90,32 @@ SsrPrediction predict_ssr(const fleet::PosteriorCloud& posterior, const site::Si
                        std::to_string(th(fleet::kSigmaZ)) + "^2) misses this road's surface [" + std::to_string(zlo) +
                        ", " + std::to_string(zhi) + "] m");
     }
+    // The traffic (v, m2) is known only through the observed trucks: each θ draw weighs them by
+    // a Bayesian bootstrap (Dirichlet(1, ..., 1) weights, Rubin 1981), so the band of the mean
+    // also carries the uncertainty of a traffic mix seen in, say, 100 trucks. The weights
+    // average to equal, so the mean and the limits are unchanged in expectation.
+    traffic_cdf.resize(n_obs);
+    double total = 0.0;
+    for (std::size_t i = 0; i < n_obs; ++i) {
+      traffic_cdf[i] = total += options.traffic_bootstrap ? -std::log(fleet::uniform_open01(engine)) : 1.0;
+    }
+    // The T trucks of one θ draw form a Latin hypercube over (observed truck, k, k_t, z). With
+    // independent draws the per-θ mean pattern carries Monte Carlo noise of about s/√T (s the
+    // truck-to-truck spread of the IF: 0.01 on AS3 at T = 100), which the band of the mean
+    // would report as posterior uncertainty; stratifying removes most of it at no extra passes.
+    const auto u_obs = stratified_uniforms(engine, T), u_k = stratified_uniforms(engine, T),
+               u_kt = stratified_uniforms(engine, T), u_z = stratified_uniforms(engine, T);
+    const double inf = std::numeric_limits<double>::infinity();
     for (int t = 0; t < T; ++t) {
+      const auto i = static_cast<std::size_t>(t);
       const Eigen::Index b = static_cast<Eigen::Index>(r) * T + t;
-      const std::size_t obs = pick_truck(engine);
+      const auto obs = std::min<std::size_t>(
+          n_obs - 1, std::upper_bound(traffic_cdf.begin(), traffic_cdf.end(), u_obs[i] * total) - traffic_cdf.begin());
       batch.speed_mps[b] = posterior.speed_mps[obs];
       batch.sprung_mass_kg[b] = posterior.sprung_mass_kg[obs];
-      batch.stiffness_npm[b] = positive_normal(engine, th(fleet::kK), th(fleet::kSigmaK));
-      batch.tyre_stiffness_npm[b] = positive_normal(engine, th(fleet::kKt), th(fleet::kSigmaKt));
-      double z;
-      do z = th(fleet::kZ) + th(fleet::kSigmaZ) * std_normal(engine);
-      while (z < zlo || z > zhi);
-      batch.lateral_m[b] = z;
+      batch.stiffness_npm[b] = fleet::truncated_normal_quantile(u_k[i], th(fleet::kK), th(fleet::kSigmaK), 0.0, inf);
+      batch.tyre_stiffness_npm[b] = fleet::truncated_normal_quantile(u_kt[i], th(fleet::kKt), th(fleet::kSigmaKt), 0.0, inf);
+      batch.lateral_m[b] = fleet::truncated_normal_quantile(u_z[i], th(fleet::kZ), th(fleet::kSigmaZ), zlo, zhi);
     }
   }
   Eigen::ArrayXXd model_if(n_pos, batch.size());

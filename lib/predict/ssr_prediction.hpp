@@ -2,7 +2,9 @@
 // along the road. Draw θ from the weighted posterior, trucks from the fleet distribution θ
 // describes (k, k_t, z), speed and sprung mass from the observed trucks, simulate, add
 // N(0, σ_IF²). Reported per position: the mean IF, the 2.5 / 97.5 % prediction limits, and the
-// 95 % credible band of the fleet's mean pattern (the spread of the per-θ mean over θ).
+// 95 % credible band of the fleet's mean pattern (the spread of the per-θ mean over θ and over a
+// Bayesian bootstrap of the observed traffic, with as little simulation noise as stratified
+// sampling leaves).
 // Works on any site: the one fitted, or another road (paper Fig. 9).
 #pragma once
 
@@ -19,7 +21,8 @@ namespace ssrfleet::predict {
 
 struct PredictionOptions {
   int theta_draws = 200;       // θ draws (for the band of the mean pattern)
-  int trucks_per_draw = 100;   // simulated trucks per θ draw
+  int trucks_per_draw = 100;   // simulated trucks per θ draw (a Latin hypercube, see the .cpp)
+  bool traffic_bootstrap = true;  // weigh the observed (v, m2) by a Bayesian bootstrap per θ draw
   std::uint64_t seed = 1;
 
   void validate() const;  // UsageError naming the option

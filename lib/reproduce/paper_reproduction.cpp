@@ -359,12 +359,13 @@ Result run(const Options& o) {
           seed9 + 1);
       SiteComparison cmp;
       cmp.road = road;
+      cmp.sensors = M;
       cmp.coverage = coverage(log9.records, pred9, 0, M, 0);
       std::string name = "fig9_" + road;
       std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
       write(name + ".csv", [&](std::ostream& os) {
         os << "sensor,position_m,predicted_mean,predicted_lower95,predicted_upper95,true_mean,true_lower95,true_upper95,"
-              "abs_mean_diff,population_mean\n";
+              "abs_mean_diff,population_mean,predicted_mean_lower95,predicted_mean_upper95\n";
         for (int m = 0; m < M; ++m) {
           const double true_mean = log9.model_if.row(m).mean();
           std::vector<double> y;
@@ -374,11 +375,14 @@ Result run(const Options& o) {
           if (d > cmp.max_abs_mean_diff) cmp.max_abs_mean_diff = d, cmp.max_mean_sensor = m + 1;
           const double population_mean = population9.model_if.row(m).mean();
           cmp.max_abs_population_diff = std::max(cmp.max_abs_population_diff, std::abs(pred9.mean_if[m] - population_mean));
+          cmp.max_abs_oracle_diff = std::max(cmp.max_abs_oracle_diff, std::abs(population_mean - true_mean));
+          cmp.band_covers_population += population_mean >= pred9.mean_lower95[m] && population_mean <= pred9.mean_upper95[m];
+          cmp.max_band_half_width = std::max(cmp.max_band_half_width, 0.5 * (pred9.mean_upper95[m] - pred9.mean_lower95[m]));
           cmp.max_abs_limit_diff =
               std::max({cmp.max_abs_limit_diff, std::abs(pred9.lower95[m] - tl), std::abs(pred9.upper95[m] - tu)});
           os << (m + 1) << ',' << pred9.position_m[static_cast<std::size_t>(m)] << ',' << pred9.mean_if[m] << ','
              << pred9.lower95[m] << ',' << pred9.upper95[m] << ',' << true_mean << ',' << tl << ',' << tu << ',' << d
-             << ',' << population_mean << '\n';
+             << ',' << population_mean << ',' << pred9.mean_lower95[m] << ',' << pred9.mean_upper95[m] << '\n';
         }
       });
       res.fig9.push_back(cmp);
@@ -454,6 +458,11 @@ Result run(const Options& o) {
          << " |\n";
       os << "| Fig. 9 | " << c.road << ": largest abs. difference of mean IF, predicted vs the true fleet's population mean (20000 trucks) | "
          << fixed(c.max_abs_population_diff, 4) << " | (not in the paper: separates inference error from the new fleet's sampling error) |\n";
+      os << "| Fig. 9 | " << c.road << ": widest 95 % band of the predicted mean (half-width); sensors whose band holds the population mean | "
+         << fixed(c.max_band_half_width, 4) << "; " << c.band_covers_population << " of " << c.sensors
+         << " | (not in the paper: how precisely the AS1 fit fixes the mean on this road) |\n";
+      os << "| Fig. 9 | " << c.road << ": largest abs. difference of mean IF, population mean vs new fleet | "
+         << fixed(c.max_abs_oracle_diff, 4) << " | (not in the paper: what a perfect predictor would miss by) |\n";
       os << "| Fig. 9 | " << c.road << ": largest abs. difference of a 95 % limit | " << fixed(c.max_abs_limit_diff, 4)
          << " | (no number given) |\n";
       os << "| Fig. 9 | " << c.road << ": new fleet's observed IFs inside the predicted limits | " << pct(c.coverage)

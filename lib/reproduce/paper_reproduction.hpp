@@ -35,6 +35,10 @@ struct SiteComparison {     // Fig. 9: prediction from the AS1 fit vs a new flee
   double max_abs_mean_diff = 0.0;   // largest |predicted mean - true mean| over sensors
   int max_mean_sensor = 0;          // 1-based
   double max_abs_population_diff = 0.0;  // largest |predicted mean - Table 1 population mean|
+  double max_abs_oracle_diff = 0.0;  // largest |population mean - true mean|: a perfect predictor's miss
+  int sensors = 0;
+  int band_covers_population = 0;    // sensors whose 95 % band of the mean holds the population mean
+  double max_band_half_width = 0.0;  // widest half-width of that band over sensors
   double max_abs_limit_diff = 0.0;  // largest |predicted limit - empirical limit| over sensors, both limits
   double coverage = 0.0;            // share of the new fleet's observed IFs inside the predicted limits
 };
