@@ -53,7 +53,7 @@ std::vector<double> parse_positions(const std::string& text) {
 
 int run_predict(int argc, const char* const argv[]) {
   std::string posterior_path, road = "AS1", out = "-", positions, seed_text = "1";
-  bool new_road = false, quiet = false;
+  bool new_road = false, quiet = false, fixed_traffic = false;
   predict::PredictionOptions options;
   SiteFlags site_flags;
   po::options_description desc("predict options");
@@ -65,7 +65,10 @@ int run_predict(int argc, const char* const argv[]) {
       ("positions", po::value(&positions), "where to predict: list 'a,b,c' or FIRST:STEP:LAST (default: the sensors)")
       ("draws", po::value(&options.theta_draws)->default_value(options.theta_draws), "posterior draws of theta")
       ("trucks-per-draw", po::value(&options.trucks_per_draw)->default_value(options.trucks_per_draw),
-       "simulated trucks per theta draw")
+       "simulated trucks per theta draw (stratified: a Latin hypercube over the observed truck, k, k_t, z)")
+      ("fixed-traffic", po::bool_switch(&fixed_traffic),
+       "take the observed trucks' speeds and masses as the traffic itself: the band of the mean then shows "
+       "theta's uncertainty only (default: a Bayesian bootstrap of them adds the uncertainty of the traffic mix)")
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
       ("out,o", po::value(&out)->default_value(out), "prediction CSV to write ('-' = standard output)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
@@ -76,6 +79,7 @@ int run_predict(int argc, const char* const argv[]) {
     return 0;
   }
   options.seed = parse_seed(seed_text);
+  options.traffic_bootstrap = !fixed_traffic;
   const auto cloud = io::read_posterior_file(posterior_path);
   const site::Site site(site::load_road(road), site_flags.to_options());
   if (!new_road && cloud.site_fingerprint != site.fingerprint()) {

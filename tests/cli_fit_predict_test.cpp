@@ -59,6 +59,13 @@ TEST_CASE("fit then predict gives the SSR table at the sensors and the same bits
   const auto fig9 =
       run_ssrfleet("predict --posterior " + q(dir.file("p1.json")) + " --road AS2 --new-road --draws 10 --trucks-per-draw 5 --quiet", dir);
   CHECK(fig9.status == 0);
+  // --fixed-traffic switches the Bayesian bootstrap of the observed traffic off (its effect on
+  // the band is tested in predict_ssr_test.cpp): same seed, other draws, same table shape.
+  const auto fixed = run_ssrfleet("predict --posterior " + q(dir.file("p1.json")) +
+                                      " --draws 20 --trucks-per-draw 10 --fixed-traffic --quiet", dir);
+  REQUIRE(fixed.status == 0);
+  CHECK(fixed.out != pred.out);
+  CHECK(std::count(fixed.out.begin(), fixed.out.end(), '\n') == 17);
 }
 
 TEST_CASE("fit and predict refuse bad input with a clear message and no output", "[cli]") {

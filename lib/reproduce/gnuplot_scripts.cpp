@@ -60,14 +60,17 @@ std::string fig8() {
 
 std::string fig9(const std::string& road, const std::string& file) {
   return io::png_and_svg_script(file, std::string(kStyles) +
-      "set title \"Fig. 9: " + road + ", new 100-truck fleet vs prediction from the AS1 fit\"\n"
+      "set title \"Fig. 9: " + road + ", a new fleet vs the prediction from the AS1 fit\"\n"
       "set xlabel 'position along the road (m)'\nset ylabel 'impact factor (-)'\n"
-      "plot '" + file + ".csv' skip 1 using 2:3 with linespoints ls 1 pt 5 ps 0.6 title 'predicted mean', \\\n"
+      "set style fill transparent solid 0.25 noborder\n"
+      "plot '" + file + ".csv' skip 1 using 2:11:12 with filledcurves lc rgb '#1f4e9c' title '95 % band of the predicted mean', \\\n"
+      "     '' skip 1 using 2:3 with linespoints ls 1 pt 5 ps 0.6 title 'predicted mean', \\\n"
       "     '' skip 1 using 2:4 with lines ls 2 title 'predicted 95 % limits', \\\n"
       "     '' skip 1 using 2:5 with lines ls 2 notitle, \\\n"
       "     '' skip 1 using 2:6 with linespoints ls 3 pt 7 ps 0.6 title 'true mean', \\\n"
       "     '' skip 1 using 2:7 with lines ls 4 title 'true 95 % limits', \\\n"
-      "     '' skip 1 using 2:8 with lines ls 4 notitle\n");
+      "     '' skip 1 using 2:8 with lines ls 4 notitle, \\\n"
+      "     '' skip 1 using 2:10 with lines lc rgb '#000000' lw 1 dt 3 title 'population mean (20000 trucks)'\n");
 }
 
 std::string evolution() {
