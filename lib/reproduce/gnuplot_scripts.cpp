@@ -67,8 +67,8 @@ std::string fig9(const std::string& road, const std::string& file) {
       "     '' skip 1 using 2:3 with linespoints ls 1 pt 5 ps 0.6 title 'predicted mean', \\\n"
       "     '' skip 1 using 2:4 with lines ls 2 title 'predicted 95 % limits', \\\n"
       "     '' skip 1 using 2:5 with lines ls 2 notitle, \\\n"
-      "     '' skip 1 using 2:6 with linespoints ls 3 pt 7 ps 0.6 title 'true mean', \\\n"
-      "     '' skip 1 using 2:7 with lines ls 4 title 'true 95 % limits', \\\n"
+      "     '' skip 1 using 2:6 with linespoints ls 3 pt 7 ps 0.6 title 'new fleet: mean', \\\n"
+      "     '' skip 1 using 2:7 with lines ls 4 title 'new fleet: 2.5 / 97.5 % quantiles', \\\n"
       "     '' skip 1 using 2:8 with lines ls 4 notitle, \\\n"
       "     '' skip 1 using 2:10 with lines lc rgb '#000000' lw 1 dt 3 title 'population mean (20000 trucks)'\n");
 }
