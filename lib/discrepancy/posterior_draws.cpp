@@ -36,8 +36,6 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::FleetSmc& fi
   out.sigma_if.assign(chosen.size(), 0.0);
   out.stiffness_pit.assign(chosen.size(), Eigen::VectorXd());
   const fleet::ModelExtension* extension = target.extension();
-  // An extension of the fleet model only (second_class) leaves every pass the base model's.
-  const fleet::ModelExtension* forward = extension != nullptr && extension->edits_forward() ? extension : nullptr;
   const smc::ParallelFor parallel(threads);
   parallel(static_cast<Eigen::Index>(chosen.size()), [&](Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index d = begin; d < end; ++d) {
@@ -56,7 +54,7 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::FleetSmc& fi
                           psi.data()});
       }
       Eigen::ArrayXXd f(M, n);
-      fleet::simulate_passes(site, forward, passes, f);
+      fleet::simulate_passes(site, extension, passes, f);
       const auto slot = static_cast<std::size_t>(d);
       out.model_if[slot] = f.matrix();
       out.lateral_m[slot] = lateral;

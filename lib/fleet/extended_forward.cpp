@@ -23,6 +23,7 @@ void simulate_passes(const site::Site& site, const ModelExtension* extension, co
                      Eigen::Ref<Eigen::ArrayXXd> if_out, Eigen::ArrayXd* min_if) {
   const auto n = static_cast<Eigen::Index>(passes.size());
   if (n == 0) return;
+  if (extension != nullptr && !extension->edits_forward()) extension = nullptr;  // e.g. second_class
   vehicle::QuarterCarBatch cars;
   cars.sprung_mass_kg.resize(n);
   cars.unsprung_mass_kg.resize(n);

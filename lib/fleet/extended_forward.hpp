@@ -24,7 +24,8 @@ PassSetup base_pass(const site::Site& site, double speed_mps, double sprung_mass
 
 // Model impact factors at the site's sensors, sensors x passes, through the batched integrator.
 // Passes that share a psi pointer share one added profile, so callers should point passes of
-// the same parameters at the same storage. extension may be null.
+// the same parameters at the same storage. extension may be null; one that edits no pass
+// (ModelExtension::edits_forward() false) is the base model here.
 // min_if (if given) gets each pass's minimum IF over the road with the extension's pass edits but
 // without an added profile (a defect's own dip is not in it).
 void simulate_passes(const site::Site& site, const ModelExtension* extension, const std::vector<ExtendedPass>& passes,

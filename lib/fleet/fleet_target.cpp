@@ -111,12 +111,7 @@ void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& 
   for (Eigen::Index i = 0; i < P; ++i) {
     smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
     const HyperVector t = theta_of(i);
-    if (stiffness_edited()) {
-      const double u = smc::uniform01(rng);
-      latents_(3 * n + kStiffness, i) = options_.extension->draw_stiffness(psi_.col(i).data(), t[kK], t[kSigmaK], u, standard_normal(rng));
-    } else {
-      latents_(3 * n + kStiffness, i) = t[kK] + t[kSigmaK] * standard_normal(rng);
-    }
+    latents_(3 * n + kStiffness, i) = draw_stiffness(rng, t, psi_.col(i).data());
     latents_(3 * n + kTyreStiffness, i) = t[kKt] + t[kSigmaKt] * standard_normal(rng);
     // z ~ N(Z, σ_z²) truncated to the road: the prior box keeps at least ~45 % of the mass on it,
     // so rejection is cheap.
@@ -175,6 +170,12 @@ void FleetTarget::recompute_sums(Eigen::Index i) {
 
 bool FleetTarget::stiffness_edited() const {
   return options_.extension != nullptr && options_.extension->edits_stiffness_distribution();
+}
+
+double FleetTarget::draw_stiffness(smc::Rng& rng, const HyperVector& t, const double* psi) const {
+  if (!stiffness_edited()) return t[kK] + t[kSigmaK] * standard_normal(rng);
+  const double u = smc::uniform01(rng);  // drawn first: the order fixes the stream
+  return options_.extension->draw_stiffness(psi, t[kK], t[kSigmaK], u, standard_normal(rng));
 }
 
 double FleetTarget::latent_log_density(const double* x, const HyperVector& t, const double* psi) const {
@@ -505,13 +506,8 @@ void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::Par
       smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
       const HyperVector t = theta_of(i);
       for (Eigen::Index j = 0; j < older; ++j) {
-        if (stiffness_from_prior && stiffness_edited()) {
-          const double u = smc::uniform01(rng);
-          proposals(3 * j + kStiffness, i) = options_.extension->draw_stiffness(psi_.col(i).data(), t[kK], t[kSigmaK], u, standard_normal(rng));
-          proposals(3 * j + kTyreStiffness, i) = t[kKt] + t[kSigmaKt] * standard_normal(rng);
-          proposals(3 * j + kLateral, i) = latents_(3 * j + kLateral, i);
-        } else if (stiffness_from_prior) {
-          proposals(3 * j + kStiffness, i) = t[kK] + t[kSigmaK] * standard_normal(rng);
+        if (stiffness_from_prior) {
+          proposals(3 * j + kStiffness, i) = draw_stiffness(rng, t, psi_.col(i).data());
           proposals(3 * j + kTyreStiffness, i) = t[kKt] + t[kSigmaKt] * standard_normal(rng);
           proposals(3 * j + kLateral, i) = latents_(3 * j + kLateral, i);
         } else {

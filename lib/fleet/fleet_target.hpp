@@ -129,6 +129,9 @@ class FleetTarget final : public smc::TemperedModel {
   double base_density(Eigen::Index i, const HyperVector& theta, const double* newest_latents) const;
   // log p(k, k_t, z | θ, ψ) of one truck, with the extension's stiffness distribution if it has one.
   double latent_log_density(const double* latents, const HyperVector& theta, const double* psi) const;
+  // A truck's k drawn from the fleet distribution p(k | θ, ψ): the base model's N(K, σ_k²) or the
+  // extension's.
+  double draw_stiffness(smc::Rng& rng, const HyperVector& theta, const double* psi) const;
   // Whether the extension replaces the fleet's stiffness distribution (model_extension.hpp).
   bool stiffness_edited() const;
   // Σ over particle i's first `trucks` kept trucks of the extension's log p(k | mean, sd, ψ).
