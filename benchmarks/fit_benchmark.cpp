@@ -4,13 +4,17 @@
 //   SMC  - FleetSmc replaying the log truck by truck (default options except particles, threads,
 //          seed): total wall time, per-truck update latency (steady_clock around absorb()),
 //          integrator passes, passes per second;
-//   MCMC - run_batch_mcmc on the same records (burn-in = iterations / 4, thin 1): the wall time
+//   MCMC - run_batch_mcmc on the same records (burn-in 5000 sweeps as `fit --method mcmc`, thin 1;
+//          50000 sweeps in all, enough to reach ESS 400 on this case): the wall time
 //          at which the Geyer ESS of every one of the 7 hyperparameters first reaches 400,
 //          found on prefixes of the kept chain;
 //
 // then the posteriors side by side against each other and the truth, and the SMC replayed with
 // --accuracy-seeds more seeds on the same data: the scatter of its posterior means gives its
-// equivalent ESS (seed_scatter.hpp), so that the speed-up is also stated at equal accuracy.
+// equivalent ESS (seed_scatter.hpp), so that the speed-up is also stated at equal accuracy. As
+// `ssrfleet fit` does, every replay ends with --final-sweeps rejuvenation sweeps
+// (FleetSmc::rejuvenate); the equivalent ESS is measured both at the end of the replay and after
+// them, side by side, and the equal-accuracy time counts the sweeps.
 //
 // Integrator share: the library does not time its integrator calls, so the share is an ESTIMATE:
 // the cost of one pass of Site::impact_factors is calibrated in this run (single thread, batches
@@ -21,7 +25,8 @@
 // (k <= 0, kt <= 0, z off the road) counts as a full pass (a small over-estimate).
 //
 //   fit_benchmark [--trucks 100] [--particles 1024] [--threads 0=all] [--seed 1]
-//                 [--mcmc-iterations 20000] [--accuracy-seeds 7] [--json FILE] [--markdown FILE]
+//                 [--mcmc-iterations 50000] [--mcmc-burn-in 5000] [--accuracy-seeds 7] [--final-sweeps 50]
+//                 [--json FILE] [--markdown FILE]
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -188,13 +193,17 @@ nlohmann::json summary_json(const fleet::ParameterSummary& s) {
 
 void usage() {
   std::cerr << "usage: fit_benchmark [--trucks 100] [--particles 1024] [--threads 0=all] [--seed 1]\n"
-               "                     [--mcmc-iterations 20000] [--accuracy-seeds 7] [--json FILE] [--markdown FILE]\n";
+               "                     [--mcmc-iterations 50000] [--mcmc-burn-in 5000] [--accuracy-seeds 7] [--final-sweeps "
+            << fleet::FleetSmc::Options{}.final_sweeps << "]\n"
+               "                     [--json FILE] [--markdown FILE]\n";
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  int trucks = 100, particles = 1024, threads = 0, mcmc_iterations = 20000, accuracy_seeds = 7;
+  int trucks = 100, particles = 1024, threads = 0, mcmc_iterations = 50000, accuracy_seeds = 7;
+  int final_sweeps = fleet::FleetSmc::Options{}.final_sweeps;
+  int burn_in = 5000;
   std::uint64_t seed = 1;
   std::string json_path, markdown_path;
   try {
@@ -207,6 +216,8 @@ int main(int argc, char** argv) {
       else if (a == "--seed" && has_value) seed = std::stoull(argv[++i]);
       else if (a == "--mcmc-iterations" && has_value) mcmc_iterations = std::stoi(argv[++i]);
       else if (a == "--accuracy-seeds" && has_value) accuracy_seeds = std::stoi(argv[++i]);
+      else if (a == "--mcmc-burn-in" && has_value) burn_in = std::stoi(argv[++i]);
+      else if (a == "--final-sweeps" && has_value) final_sweeps = std::stoi(argv[++i]);
       else if (a == "--json" && has_value) json_path = argv[++i];
       else if (a == "--markdown" && has_value) markdown_path = argv[++i];
       else {
@@ -218,13 +229,14 @@ int main(int argc, char** argv) {
     usage();
     return 64;
   }
-  if (trucks < 2 || particles < 2 || threads < 0 || mcmc_iterations < 8 || accuracy_seeds < 0) {
+  if (trucks < 2 || particles < 2 || threads < 0 || mcmc_iterations < 8 || burn_in < 0 ||
+      burn_in > mcmc_iterations - kEssPrefixStep || accuracy_seeds < 0 || final_sweeps < 0) {
     std::cerr << "fit_benchmark: need trucks >= 2, particles >= 2, threads >= 0, mcmc-iterations >= 8, "
-                 "accuracy-seeds >= 0\n";
+                 "0 <= mcmc-burn-in <= mcmc-iterations - "
+              << kEssPrefixStep << ", accuracy-seeds >= 0, final-sweeps >= 0\n";
     return 64;
   }
   const int threads_used = threads > 0 ? threads : smc::TemperedSampler::Options::default_threads();
-  const int burn_in = mcmc_iterations / 4;
   const unsigned hardware_threads = std::thread::hardware_concurrency();
 
   // ---- 1. Data, once --------------------------------------------------------------------------
@@ -278,6 +290,13 @@ int main(int argc, char** argv) {
   const double load_after_smc = load_average();
   const double newest_acceptance = tempering_steps > 0 ? newest_acceptance_sum / tempering_steps : 0.0;
   const long long smc_passes = smc.target().integrator_passes();
+  const auto replay_summary = fleet::summarise_weighted(smc.cloud().theta, smc.cloud().weights);
+  // The offline fit's last step (not part of the replay's targets, counted in the equal-accuracy time).
+  const auto final_t0 = Clock::now();
+  smc.rejuvenate(final_sweeps);
+  const double final_s = seconds_since(final_t0);
+  const long long final_passes = smc.target().integrator_passes() - smc_passes;
+  const double final_acceptance = smc.target().older_acceptance();
   const fleet::PosteriorCloud cloud = smc.cloud();
   double latency_total = 0.0;
   for (double t : latency_s) latency_total += t;
@@ -356,7 +375,7 @@ int main(int argc, char** argv) {
   const auto mcmc_summary = fleet::summarize_draws(mcmc.theta_draws);
 
   // ---- 5b. The SMC's own Monte Carlo error: the same data, more seeds -----------------------------
-  std::vector<bench::RunSummary> seed_runs{smc_summary};
+  std::vector<bench::RunSummary> seed_runs{smc_summary}, seed_runs_replay{replay_summary};
   for (int r = 1; r <= accuracy_seeds; ++r) {
     std::printf("SMC replay with seed %llu (%d of %d, for the seed-to-seed scatter) ...\n",
                 static_cast<unsigned long long>(seed + r), r, accuracy_seeds);
@@ -365,19 +384,26 @@ int main(int argc, char** argv) {
     o.sampler.seed = seed + static_cast<std::uint64_t>(r);
     fleet::FleetSmc again(site, o);
     for (const auto& record : records) again.absorb(record);
+    seed_runs_replay.push_back(fleet::summarise_weighted(again.cloud().theta, again.cloud().weights));
+    again.rejuvenate(final_sweeps);
     seed_runs.push_back(fleet::summarise_weighted(again.cloud().theta, again.cloud().weights));
   }
   const bench::SeedScatter scatter = bench::seed_scatter(seed_runs);
+  const bench::SeedScatter scatter_replay = bench::seed_scatter(seed_runs_replay);
   const bool equal_accuracy = scatter.runs >= 2;
   // The SMC's error variance falls as 1/particles and its cost grows with them, so its time to
-  // the MCMC's accuracy (ESS 400) is its wall time x 400 / its equivalent ESS.
-  const double smc_time_equal_accuracy = equal_accuracy ? smc_wall_s * kEssTarget / scatter.min_ess : 0.0;
+  // the MCMC's accuracy (ESS 400) is its wall time x 400 / its equivalent ESS; the fit's time is
+  // the replay and the final sweeps.
+  const double fit_s = smc_wall_s + final_s;
+  const double smc_time_equal_accuracy = equal_accuracy ? fit_s * kEssTarget / scatter.min_ess : 0.0;
+  const double replay_time_equal_accuracy = equal_accuracy ? smc_wall_s * kEssTarget / scatter_replay.min_ess : 0.0;
 
   // ---- 6. Speed-up and targets ----------------------------------------------------------------
   // If the MCMC never reached the ESS target, its whole run is a lower bound on its time to it.
   const double mcmc_time_or_bound = mcmc_time_to_target ? *mcmc_time_to_target : mcmc.wall_seconds;
   const double speedup = mcmc_time_or_bound / smc_wall_s;
   const double speedup_equal = equal_accuracy ? mcmc_time_or_bound / smc_time_equal_accuracy : 0.0;
+  const double speedup_equal_replay = equal_accuracy ? mcmc_time_or_bound / replay_time_equal_accuracy : 0.0;
   // The target says "to the same accuracy": judged at equal accuracy when the seeds were run.
   const double speedup_judged = equal_accuracy ? speedup_equal : speedup;
   const bool comparable_setup = particles == 1024 && threads_used == 2 && trucks == 100;
@@ -409,6 +435,8 @@ int main(int argc, char** argv) {
   std::printf("  %-38s %12.2f s   (%.2f cores busy on average; load average %.2f before, %.2f after)\n",
               "process CPU time during the replay", smc_cpu_s, cores_used, load_before, load_after_smc);
   std::printf("  %-38s %12.1f   (log evidence %.2f)\n", "final ESS", cloud.ess, cloud.log_evidence);
+  std::printf("  %-38s %12.3f s   (%d sweeps, %lld passes, acceptance of the last %.2f)\n", "final rejuvenation sweeps",
+              final_s, final_sweeps, final_passes, final_acceptance);
   std::printf("integrator calibration: Site::impact_factors, %d trucks per call, 1 thread, %d reps (%d before, %d "
               "after the replay)\n",
               kCalibrationBatch, kCalibrationReps, kCalibrationReps / 2, kCalibrationReps - kCalibrationReps / 2);
@@ -493,11 +521,18 @@ int main(int argc, char** argv) {
       std::printf("  %-9s %12.4g %12.4g %12.3f %12.0f\n", std::string(fleet::kHyperNames[J]).c_str(), scatter.scatter[J],
                   scatter.posterior_sd[J], scatter.scatter[J] / scatter.posterior_sd[J], scatter.equivalent_ess[J]);
     }
-    std::printf("  smallest equivalent ESS %.0f (%s; 90 %% interval %.0f-%.0f)\n", scatter.min_ess,
+    std::printf("  smallest equivalent ESS %.0f (%s; 90 %% interval %.0f-%.0f) after %d final sweeps\n", scatter.min_ess,
                 std::string(fleet::kHyperNames[static_cast<std::size_t>(scatter.worst)]).c_str(), scatter.min_ess_lo90,
-                scatter.min_ess_hi90);
-    std::printf("  SMC time to an equivalent ESS of 400: %.2f s; speed-up vs MCMC at equal accuracy: %s%.3gx\n",
-                smc_time_equal_accuracy, mcmc_time_to_target ? "" : ">= ", speedup_equal);
+                scatter.min_ess_hi90, final_sweeps);
+    std::printf("  at the end of the replay (no final sweeps): %.0f (%s; 90 %% interval %.0f-%.0f); per parameter:",
+                scatter_replay.min_ess,
+                std::string(fleet::kHyperNames[static_cast<std::size_t>(scatter_replay.worst)]).c_str(),
+                scatter_replay.min_ess_lo90, scatter_replay.min_ess_hi90);
+    for (double e : scatter_replay.equivalent_ess) std::printf(" %.0f", e);
+    std::printf("\n  SMC time to an equivalent ESS of 400: %.2f s (replay and final sweeps); speed-up vs MCMC at equal "
+                "accuracy: %s%.3gx (replay alone: %.2f s, %s%.3gx)\n",
+                smc_time_equal_accuracy, mcmc_time_to_target ? "" : ">= ", speedup_equal, replay_time_equal_accuracy,
+                mcmc_time_to_target ? "" : ">= ", speedup_equal_replay);
   }
   std::printf("\nTargets%s\n", comparable_setup ? "" : " (NOTE: not the reference setup of 100 trucks, 1024 particles, 2 threads)");
   std::printf("  whole replay <= %.0f s (1024 particles, 2 cores): %8.2f s   %s\n", kTargetReplayS, smc_wall_s,
@@ -526,7 +561,7 @@ int main(int argc, char** argv) {
   if (!json_path.empty()) {
     nlohmann::json j;
     j["benchmark"] = "fit";
-    j["config"] = {{"road", "AS1"},       {"trucks", trucks},           {"noise_sd", kNoiseSd},
+    j["config"] = {{"road", "AS1"},       {"trucks", trucks},           {"noise_sd", kNoiseSd}, {"final_sweeps", final_sweeps},
                    {"seed", seed},         {"particles", particles},     {"threads", threads_used},
                    {"mcmc_iterations", mcmc_iterations}, {"mcmc_burn_in", burn_in}, {"mcmc_thin", 1},
                    {"sensors", site.sensors()}, {"lift_offs", log.lift_offs}};
@@ -549,6 +584,8 @@ int main(int argc, char** argv) {
                 {"mh_sweeps", mh_sweeps},
                 {"resamplings", resamplings},
                 {"final_ess", cloud.ess},
+                {"final_sweeps", {{"sweeps", final_sweeps}, {"wall_s", final_s}, {"integrator_passes", final_passes},
+                                  {"acceptance_last_sweep", final_acceptance}}},
                 {"log_evidence", cloud.log_evidence}};
     j["integrator_calibration"] = {{"batch_trucks", kCalibrationBatch},
                                    {"threads", 1},
@@ -610,10 +647,19 @@ int main(int argc, char** argv) {
                                {"worst_parameter", std::string(fleet::kHyperNames[static_cast<std::size_t>(scatter.worst)])},
                                {"smc_time_to_equivalent_ess_400_s", smc_time_equal_accuracy},
                                {"speedup_at_equal_accuracy", speedup_equal},
+                               {"replay_only",
+                                {{"min_equivalent_ess", scatter_replay.min_ess},
+                                 {"min_equivalent_ess_90", {scatter_replay.min_ess_lo90, scatter_replay.min_ess_hi90}},
+                                 {"worst_parameter",
+                                  std::string(fleet::kHyperNames[static_cast<std::size_t>(scatter_replay.worst)])},
+                                 {"per_parameter_equivalent_ess", scatter_replay.equivalent_ess},
+                                 {"smc_time_to_equivalent_ess_400_s", replay_time_equal_accuracy},
+                                 {"speedup_at_equal_accuracy", speedup_equal_replay}}},
                                {"method",
                                 "equivalent ESS = (mean posterior sd / sd of the posterior means over the replays)^2; "
-                                "time = SMC wall x 400 / smallest equivalent ESS (error variance ~ 1/particles, cost ~ "
-                                "particles); 90 % interval from chi-squared(runs - 1)"}};
+                                "time = (SMC replay + final sweeps) wall x 400 / smallest equivalent ESS (error variance "
+                                "~ 1/particles, cost ~ particles); 90 % interval from chi-squared(runs - 1); replay_only: "
+                                "the same at the end of each replay, before its final sweeps"}};
     }
     j["targets"] = nlohmann::json::array(
         {{{"name", "whole replay <= 20 s (1024 particles, 2 cores)"}, {"value", smc_wall_s}, {"met", replay_met}},
@@ -636,7 +682,8 @@ int main(int argc, char** argv) {
        << trucks << "-truck AS1 fleet drawn from Table 1, sigma_IF = " << kNoiseSd << ", seed " << seed << ", "
        << site.sensors() << " sensors. Machine: " << hardware_threads << " hardware threads, " << cpu_model()
        << ", ISA " << isa_name() << ". SMC: " << particles << " particles, " << threads_used
-       << " threads, default options. MCMC: " << mcmc_iterations << " sweeps, burn-in " << burn_in
+       << " threads, default options, then " << final_sweeps << " final rejuvenation sweeps (as `ssrfleet fit`). MCMC: "
+       << mcmc_iterations << " sweeps, burn-in " << burn_in
        << ", thin 1, single threaded.\n\n"
        << "| metric | value |\n|---|---|\n"
        << "| SMC whole replay (wall) | " << fmt("%.2f", smc_wall_s) << " s |\n"
@@ -650,6 +697,8 @@ int main(int argc, char** argv) {
        << fmt("%.1f", 100.0 * capped_steps / std::max(1, tempering_steps)) << " % |\n"
        << "| SMC newest-truck MH acceptance (mean over steps) | " << fmt("%.2f", newest_acceptance) << " |\n"
        << "| SMC final ESS | " << fmt("%.0f", cloud.ess) << " |\n"
+       << "| SMC final rejuvenation: sweeps / wall / integrator passes | " << final_sweeps << " / " << fmt("%.2f", final_s)
+       << " s / " << final_passes << " |\n"
        << "| SMC process CPU time / cores busy on average | " << fmt("%.2f", smc_cpu_s) << " s / "
        << fmt("%.2f", cores_used) << " |\n"
        << "| Load average (1 min) before / after the replay | " << fmt("%.2f", load_before) << " / "
@@ -676,9 +725,15 @@ int main(int argc, char** argv) {
        << (equal_accuracy ? "| SMC equivalent ESS (smallest, " + std::string(fleet::kHyperNames[static_cast<std::size_t>(scatter.worst)]) +
                                 "; from " + std::to_string(scatter.runs) + " seeds) | " + fmt("%.0f", scatter.min_ess) +
                                 " (90 % interval " + fmt("%.0f", scatter.min_ess_lo90) + "-" +
-                                fmt("%.0f", scatter.min_ess_hi90) + ") |\n| SMC time to an equivalent ESS of 400 | " +
+                                fmt("%.0f", scatter.min_ess_hi90) + ") |\n| SMC equivalent ESS at the end of the replay, "
+                                "before the final sweeps (smallest, " +
+                                std::string(fleet::kHyperNames[static_cast<std::size_t>(scatter_replay.worst)]) + ") | " +
+                                fmt("%.0f", scatter_replay.min_ess) + " (90 % interval " +
+                                fmt("%.0f", scatter_replay.min_ess_lo90) + "-" + fmt("%.0f", scatter_replay.min_ess_hi90) +
+                                ") |\n| SMC time to an equivalent ESS of 400 (replay and final sweeps) | " +
                                 fmt("%.2f", smc_time_equal_accuracy) + " s |\n| SMC speed-up vs MCMC at equal accuracy | " +
-                                (mcmc_time_to_target ? "" : ">= ") + fmt("%.3g", speedup_equal) + "x |\n"
+                                (mcmc_time_to_target ? "" : ">= ") + fmt("%.3g", speedup_equal) + "x (replay alone, no final "
+                                "sweeps: " + (mcmc_time_to_target ? "" : ">= ") + fmt("%.3g", speedup_equal_replay) + "x) |\n"
                           : std::string())
        << "\n"
        << "\\* " << share_method << ".\n\nMCMC time to ESS: " << mcmc_time_method << ".\n\n"

@@ -8,6 +8,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "fleet/fleet_smc.hpp"
 #include "fleet/posterior_cloud.hpp"
 #include "io/wim_log.hpp"
 #include "site/site.hpp"
@@ -18,6 +19,7 @@ struct FitFlags {
   long particles = 1024;
   int threads = 0;  // 0 = all cores
   int older_sweeps = 2;
+  int final_sweeps = fleet::FleetSmc::Options{}.final_sweeps;  // after the last truck (FleetSmc::rejuvenate)
   long window = 0;  // bounded memory (see stream --window)
   double cess_target = 0.9;
   int max_sweeps = 5;

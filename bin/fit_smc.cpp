@@ -19,6 +19,9 @@ void FitFlags::add_to(po::options_description& desc) {
       ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
       ("older-sweeps", po::value(&older_sweeps)->default_value(older_sweeps),
        "MH sweeps over every older truck's latents after each new truck (0 = off)")
+      ("final-sweeps", po::value(&final_sweeps)->default_value(final_sweeps),
+       "MH sweeps over every truck's latents and the hyperparameters after the last truck: the same posterior, "
+       "less seed-to-seed error (n passes per particle each)")
       ("cess", po::value(&cess_target)->default_value(cess_target, shortest_text(cess_target)), "conditional-ESS target of each tempering step, in (0, 1)")
       ("max-sweeps", po::value(&max_sweeps)->default_value(max_sweeps), "MCMC sweeps per tempering step at most")
       ("window", po::value(&window)->default_value(window),
@@ -42,6 +45,7 @@ fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<io::WimR
   o.sampler.mh.max_steps = flags.max_sweeps;
   o.older_sweeps = flags.older_sweeps;
   if (flags.window < 0) throw UsageError("--window must be >= 0");
+  if (flags.final_sweeps < 0) throw UsageError("--final-sweeps must be >= 0");
   o.window = flags.window;
   std::string why;
   if (!o.sampler.IsValid(&why)) throw UsageError(why);
@@ -61,6 +65,20 @@ fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<io::WimR
                 << ", acceptance " << std::setprecision(2) << (blocks ? acc / blocks : 0.0) << ", "
                 << std::setprecision(3) << stage.wall_time_s << " s\n";
       if (verbose_report) *progress << stage.FullReport();
+    }
+  }
+  if (flags.final_sweeps > 0) {
+    // Announced first: on a long log they take a while (n passes per particle each).
+    if (progress) {
+      *progress << "fit: " << flags.final_sweeps << " final sweeps over all " << smc.target().kept_trucks()
+                << " trucks' latents and the hyperparameters ..." << std::flush;
+    }
+    const auto started = std::chrono::steady_clock::now();
+    smc.rejuvenate(flags.final_sweeps);
+    if (progress) {
+      *progress << " done: acceptance " << std::fixed << std::setprecision(2) << smc.target().older_acceptance() << ", "
+                << std::setprecision(3) << std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()
+                << " s\n";
     }
   }
   return smc.cloud();

@@ -85,6 +85,12 @@ TEST_CASE("fit and predict refuse bad input with a clear message and no output",
     CHECK(r.err.find("particles") != std::string::npos);
     CHECK_FALSE(std::filesystem::exists(out));
   }
+  SECTION("a negative count of final sweeps") {
+    const auto r = run_ssrfleet("fit " + q(log12) + " --sensors 76,1.5,12 --final-sweeps -1 --out " + q(out), dir);
+    CHECK(r.status == 64);
+    CHECK(r.err.find("--final-sweeps must be >= 0") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(out));
+  }
   SECTION("a seed that is not a number") {
     const auto r = run_ssrfleet("fit " + q(log12) + " --sensors 76,1.5,12 --seed 12x --out " + q(out), dir);
     CHECK(r.status == 64);

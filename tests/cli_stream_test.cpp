@@ -66,7 +66,10 @@ TEST_CASE("a stream gives the same posterior as fit on the same log", "[cli][str
   test::TempDir dir;
   const std::string log = dir.file("log.csv");
   REQUIRE(run_ssrfleet("simulate --trucks 10 --seed 8 --quiet --out " + q(log), dir).status == 0);
-  REQUIRE(run_ssrfleet("fit " + q(log) + " --particles 96 --seed 4 --quiet --out " + q(dir.file("fit.json")), dir).status == 0);
+  // The stream keeps the cloud its stages leave; fit's final rejuvenation sweeps are off to match.
+  REQUIRE(run_ssrfleet("fit " + q(log) + " --particles 96 --seed 4 --final-sweeps 0 --quiet --out " + q(dir.file("fit.json")),
+                       dir)
+              .status == 0);
   const auto r = run_ssrfleet("stream --state " + q(dir.file("state")) + " --input " + q(log) +
                                   " --particles 96 --seed 4 --quiet --report-every 5",
                               dir);

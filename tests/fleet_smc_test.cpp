@@ -11,6 +11,7 @@
 #include "io/binary_io.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/road_source.hpp"
+#include "util/errors.hpp"
 
 using namespace ssrfleet;
 
@@ -34,6 +35,34 @@ fleet::FleetSmc::Options smc_options(Eigen::Index particles, int threads, std::u
   o.sampler.seed = seed;
   return o;
 }
+
+// log γ + ℓ of every particle minus the batch MCMC's log posterior at its state: one constant
+// for all particles if the target's caches (SSR, running sums) match its latents. `scale` is
+// |log γ + ℓ| of the first particle, the size against which rounding is judged.
+struct DensityOffsets {
+  std::vector<double> offsets;
+  double scale = 0.0;
+};
+
+DensityOffsets density_offsets(const fleet::FleetSmc& smc, const Case& c) {
+  auto& target = const_cast<fleet::FleetTarget&>(smc.target());
+  const Eigen::Index P = target.particles(), n = target.kept_trucks();
+  Eigen::ArrayXd log_base(P), loglik(P);
+  target.log_density(log_base, loglik, smc::ParallelFor(1));
+  const fleet::LateralRange range{c.site.lateral_min_m(), c.site.lateral_max_m()};
+  DensityOffsets d;
+  d.scale = std::abs(log_base[0] + loglik[0]);
+  for (Eigen::Index i = 0; i < P; ++i) {
+    fleet::HyperVector theta;
+    for (int h = 0; h < fleet::kHyperCount; ++h) theta[h] = target.theta()(h, i);
+    Eigen::MatrixXd latents(n, 3);
+    for (Eigen::Index j = 0; j < n; ++j) latents.row(j) = target.truck_latents(j).col(i).transpose();
+    const Eigen::VectorXd ssr = target.sums_of_squared_residuals().col(i);
+    d.offsets.push_back(log_base[i] + loglik[i] - fleet::log_posterior_unnormalised(theta, latents, ssr, c.site.sensors(),
+                                                                                    fleet::PriorBounds{}, range));
+  }
+  return d;
+}
 }  // namespace
 
 TEST_CASE("the SMC target's density equals the batch MCMC's log posterior up to one constant", "[fleet][smc]") {
@@ -41,22 +70,8 @@ TEST_CASE("the SMC target's density equals the batch MCMC's log posterior up to 
   fleet::FleetSmc smc(c.site, smc_options(64, 1, 3));
   for (const auto& r : c.log.records) smc.absorb(r);
   // After the last stage (φ = 1), log γ + ℓ is the full log posterior of each particle's state.
-  auto& target = const_cast<fleet::FleetTarget&>(smc.target());
-  Eigen::ArrayXd log_base(64), loglik(64);
-  target.log_density(log_base, loglik, smc::ParallelFor(1));
-  const fleet::LateralRange range{c.site.lateral_min_m(), c.site.lateral_max_m()};
-  std::vector<double> offsets;
-  for (Eigen::Index i = 0; i < 64; ++i) {
-    fleet::HyperVector theta;
-    for (int h = 0; h < fleet::kHyperCount; ++h) theta[h] = target.theta()(h, i);
-    Eigen::MatrixXd latents(6, 3);
-    for (Eigen::Index j = 0; j < 6; ++j) latents.row(j) = target.truck_latents(j).col(i).transpose();
-    const Eigen::VectorXd ssr = target.sums_of_squared_residuals().col(i);
-    const double reference =
-        fleet::log_posterior_unnormalised(theta, latents, ssr, c.site.sensors(), fleet::PriorBounds{}, range);
-    offsets.push_back(log_base[i] + loglik[i] - reference);
-  }
-  for (double d : offsets) CHECK(d == Approx(offsets.front()).margin(1e-7 * std::abs(log_base[0] + loglik[0])));
+  const auto d = density_offsets(smc, c);
+  for (double o : d.offsets) CHECK(o == Approx(d.offsets.front()).margin(1e-7 * d.scale));
 }
 
 TEST_CASE("the SMC on 20 simulated trucks brackets the true fleet hyperparameters", "[fleet][smc]") {
@@ -75,7 +90,7 @@ TEST_CASE("the SMC on 20 simulated trucks brackets the true fleet hyperparameter
   CHECK(smc.target().integrator_passes() > 0);
 }
 
-TEST_CASE("the SMC gives bit-identical posteriors for one and two threads", "[fleet][smc]") {
+TEST_CASE("the SMC gives bit-identical posteriors for one and two threads, final sweeps included", "[fleet][smc]") {
   Case c(8, 21);
   fleet::FleetSmc one(c.site, smc_options(96, 1, 5));
   fleet::FleetSmc two(c.site, smc_options(96, 2, 5));
@@ -86,6 +101,37 @@ TEST_CASE("the SMC gives bit-identical posteriors for one and two threads", "[fl
   CHECK((one.cloud().theta.array() == two.cloud().theta.array()).all());
   CHECK((one.cloud().weights == two.cloud().weights).all());
   CHECK(one.cloud().log_evidence == two.cloud().log_evidence);
+  one.rejuvenate(3);
+  two.rejuvenate(3);
+  CHECK((one.cloud().theta.array() == two.cloud().theta.array()).all());
+  CHECK((one.target().latents().array() == two.target().latents().array()).all());
+}
+
+TEST_CASE("final rejuvenation moves every truck's latents, keeps the caches true and the weights as they were",
+          "[fleet][smc]") {
+  Case c(8, 11);
+  fleet::FleetSmc smc(c.site, smc_options(128, 2, 3));
+  for (const auto& r : c.log.records) smc.absorb(r);
+  const auto before = smc.cloud();
+  const Eigen::MatrixXd latents_before = smc.target().latents();
+  const auto offsets_before = density_offsets(smc, c);
+  smc.rejuvenate(4);
+  const auto after = smc.cloud();
+  // An MCMC kernel: the weights and the evidence stay; θ and the latents move.
+  CHECK((after.weights == before.weights).all());
+  CHECK(after.log_evidence == before.log_evidence);
+  CHECK((after.theta.array() != before.theta.array()).colwise().any().count() > 100);
+  const Eigen::MatrixXd& latents_after = smc.target().latents();
+  for (Eigen::Index j = 0; j < smc.target().kept_trucks(); ++j) {  // the newest truck included
+    const Eigen::Index moved =
+        (latents_after.row(3 * j).array() != latents_before.row(3 * j).array()).count();
+    INFO("truck " << j << ": " << moved << " of 128 particles moved its k");
+    CHECK(moved > 128 / 4);
+  }
+  // The caches follow the states: log γ + ℓ is still the log posterior plus the same constant.
+  const double margin = 1e-7 * offsets_before.scale;
+  for (double o : density_offsets(smc, c).offsets) CHECK(o == Approx(offsets_before.offsets.front()).margin(margin));
+  CHECK_THROWS_AS(smc.rejuvenate(-1), UsageError);
 }
 
 TEST_CASE("a record with the wrong number of sensors is refused by the fleet target", "[fleet][smc]") {

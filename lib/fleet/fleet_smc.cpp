@@ -22,6 +22,7 @@ FleetTarget::Options target_options(const FleetSmc::Options& o) {
 // Stream keys of the model's own draws, below sampler.model_rngs() of each stage.
 constexpr std::uint64_t kInitialDraws = 0;
 constexpr std::uint64_t kNewTruckDraws = 1;
+constexpr std::uint64_t kRejuvenationDraws = 2;
 }  // namespace
 
 FleetSmc::FleetSmc(const site::Site& site, Options options)
@@ -36,6 +37,10 @@ const smc::StageSummary& FleetSmc::absorb(const io::WimRecord& record) {
   if (window_ > 0 && truck_ids_.size() > FleetTarget::kPredictionPool) truck_ids_.pop_front();
   sampler_.run_stage(target_, "truck '" + record.truck_id + "' (#" + std::to_string(target_.trucks()) + ")");
   return sampler_.history().back();
+}
+
+void FleetSmc::rejuvenate(int sweeps) {
+  target_.rejuvenate(sweeps, sampler_.model_rngs().child(kRejuvenationDraws), parallel_);
 }
 
 namespace {

@@ -37,7 +37,7 @@ double sum_log_normal(double n, double sum, double sum2, double mean, double sd)
 
 FleetTarget::FleetTarget(const site::Site& site, Options options)
     : site_(site), options_(options), lateral_{site.lateral_min_m(), site.lateral_max_m()},
-      sensors_(site.sensors()) {
+      sensors_(site.sensors()), log_prior_inside_(options.prior.log_prior(options.prior.lo)) {
   if (options_.particles < 2) {
     throw UsageError("fleet target: particles is " + std::to_string(options_.particles) + ", but must be at least 2");
   }
@@ -198,8 +198,9 @@ double FleetTarget::stiffness_log_density(Eigen::Index i, double mean, double sd
 double FleetTarget::base_density(Eigen::Index i, const HyperVector& t, const double* newest) const {
   const double* s = sums_.col(i).data();
   const double* psi = psi_.col(i).data();
-  double lp = options_.prior.log_prior(t);
-  if (lp == -kInf) return lp;
+  // The prior is uniform on a box: its log density inside is one constant (log_prior_inside_).
+  if (!options_.prior.contains(t)) return -kInf;
+  double lp = log_prior_inside_;
   const double n = static_cast<double>(trucks() - 1);
   if (n > 0) {
     // With an extension's stiffness distribution there is no sufficient statistic: every older
@@ -277,13 +278,15 @@ void FleetTarget::residuals(Eigen::Index truck, const Eigen::Ref<const Eigen::Ma
 }
 
 void FleetTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
-                              const smc::ParallelFor& /*parallel*/) {
+                              const smc::ParallelFor& parallel) {
   const Eigen::Index newest = kept_trucks() - 1;
-  for (Eigen::Index i = 0; i < options_.particles; ++i) {
-    const HyperVector t = theta_of(i);
-    log_base[i] = base_density(i, t, latents_.col(i).data() + 3 * newest);
-    loglik[i] = newest_loglik(ssr_(newest, i), t[kSigmaIf]);
-  }
+  parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const HyperVector t = theta_of(i);
+      log_base[i] = base_density(i, t, latents_.col(i).data() + 3 * newest);
+      loglik[i] = newest_loglik(ssr_(newest, i), t[kSigmaIf]);
+    }
+  });
 }
 
 std::vector<smc::BlockSpec> FleetTarget::blocks() const {
@@ -300,11 +303,14 @@ void FleetTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen::Ma
   const Eigen::Index P = options_.particles;
   proposed_ssr_.resize(P);
   residuals(kept_trucks() - 1, proposed, proposed_ssr_, parallel);
-  for (Eigen::Index i = 0; i < P; ++i) {
-    const HyperVector t = theta_of(i);
-    log_base[i] = base_density(i, t, proposed.col(i).data());
-    loglik[i] = newest_loglik(proposed_ssr_[i], t[kSigmaIf]);
-  }
+  // Each particle's densities are its own: the chunks' results do not depend on the split.
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const HyperVector t = theta_of(i);
+      log_base[i] = base_density(i, t, proposed.col(i).data());
+      loglik[i] = newest_loglik(proposed_ssr_[i], t[kSigmaIf]);
+    }
+  });
 }
 
 void FleetTarget::accept(int /*block*/, const std::vector<char>& accepted,
@@ -333,7 +339,7 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
     // p(k, k_t | θ): one truck's data say little about its stiffnesses, so the prior proposal
     // is accepted often and moves them across their whole range, which the spread parameters
     // σ_k and σ_kt need (a random walk alone left them 0.4 posterior sd off a long MCMC).
-    older_trucks_sweep(rngs.child(1), parallel, older_sweeps_done_ % 2 == 1);
+    older_trucks_sweep(rngs.child(1), parallel, older_sweeps_done_ % 2 == 1, kept_trucks() - 1, older_scale_);
     ++older_sweeps_done_;
   }
   if (phi == 1.0 && options_.extension != nullptr && options_.extension->edits_forward()) {
@@ -348,12 +354,38 @@ void FleetTarget::custom_moves(double phi, const smc::RngFactory& rngs, const sm
     }
   }
   if (stiffness_edited()) stiffness_distribution_sweep(rngs.child(4), parallel);
+  theta_moves(phi, rngs.child(0), parallel, log_base, loglik);
+}
+
+void FleetTarget::rejuvenate(int sweeps, const smc::RngFactory& rngs, const smc::ParallelFor& parallel) {
+  if (sweeps < 0) throw UsageError("fleet target: rejuvenation sweeps must be >= 0");
+  if (kept_trucks() == 0) return;
+  // The newest truck's proposal scale starts at 1 and adapts within this call; the older ones
+  // carry on from the stages.
+  std::vector<double> scales = older_scale_;
+  scales.push_back(1.0);
+  Eigen::ArrayXd log_base(options_.particles), loglik(options_.particles);  // not needed after φ = 1
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    const smc::RngFactory r = rngs.child(static_cast<std::uint64_t>(sweep));
+    older_trucks_sweep(r.child(1), parallel, sweep % 2 == 1, kept_trucks(), scales);
+    if (options_.extension != nullptr && options_.extension->edits_forward()) {
+      extension_sweep(r.child(2), parallel, PsiMove::kRandomWalk);
+    }
+    if (stiffness_edited()) stiffness_distribution_sweep(r.child(4), parallel);
+    theta_moves(1.0, r.child(0), parallel, log_base, loglik);
+  }
+  scales.pop_back();
+  older_scale_ = scales;
+}
+
+void FleetTarget::theta_moves(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
+                              Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) {
   const Eigen::Index newest = kept_trucks() - 1;
   const double n_all = static_cast<double>(trucks());  // the newest truck's latents are in γ in full
   const auto& prior = options_.prior;
   parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index i = begin; i < end; ++i) {
-      smc::Rng rng = rngs.child(0).stream(static_cast<std::uint64_t>(i));
+      smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
       HyperVector t = theta_of(i);
       const double* s = sums_.col(i).data();
       const double* x = latents_.col(i).data() + 3 * newest;
@@ -480,8 +512,8 @@ void FleetTarget::load(io::BinaryReader& in) {
 }
 
 void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
-                                     bool stiffness_from_prior) {
-  const Eigen::Index P = options_.particles, older = kept_trucks() - 1;
+                                     bool stiffness_from_prior, Eigen::Index swept, std::vector<double>& scales) {
+  const Eigen::Index P = options_.particles, older = swept;
   // Per truck: a proposal from the particle cloud's spread of that truck's latents (equal
   // weights: this runs right after a stage, whatever the weights), scaled by 2.38/√3 and by a
   // multiplier adapted on acceptance from stage to stage.
@@ -494,7 +526,7 @@ void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::Par
     Eigen::Matrix3d cov = centred * centred.transpose() / static_cast<double>(P);
     // A ridge keeps a collapsed coordinate movable: 1e-6 of the prior scale of each latent.
     cov.diagonal() += Eigen::Vector3d(1e-6 * 5e4, 1e-6 * 2e5, 1e-6 * 0.5).array().square().matrix();
-    const double scale = older_scale_[static_cast<std::size_t>(j)] * 2.38 / std::sqrt(3.0);
+    const double scale = scales[static_cast<std::size_t>(j)] * 2.38 / std::sqrt(3.0);
     chol[static_cast<std::size_t>(j)] = Eigen::LLT<Eigen::Matrix3d>(cov).matrixL();
     chol[static_cast<std::size_t>(j)] *= scale;
   }
@@ -564,7 +596,7 @@ void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::Par
     Eigen::Index moved = 0;
     for (Eigen::Index i = 0; i < P; ++i) moved += took[static_cast<std::size_t>(i * older + j)];
     const double rate = static_cast<double>(moved) / static_cast<double>(P);
-    auto& scale = older_scale_[static_cast<std::size_t>(j)];
+    auto& scale = scales[static_cast<std::size_t>(j)];
     scale = smc::tuned_scale_factor(scale, rate);
     total += rate;
   }

@@ -121,6 +121,15 @@ class FleetTarget final : public smc::TemperedModel {
   void custom_moves(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
                     Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) override;
 
+  // Rejuvenation at the end of a replay: `sweeps` Metropolis-within-Gibbs sweeps at φ = 1 over
+  // every kept truck's latents (the newest included), alternating the random walk and the
+  // independence proposal from p(k, k_t | θ) as the stages do, then θ (and ψ) as in custom_moves.
+  // Each sweep costs n passes per particle. It leaves the posterior and the weights as they are
+  // and only undoes the ancestry the particles share: the stages refresh older trucks twice per
+  // truck, so after the last few resamplings many particles still carry the same latents for
+  // most trucks, and σ_k, K_t and σ_kt, which only those latents inform, vary from seed to seed.
+  void rejuvenate(int sweeps, const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
+
  private:
   // Running sums over every truck before the newest (retired and kept), per particle.
   enum Sum : int { kSumK = 0, kSumK2, kSumKt, kSumKt2, kSumZ, kSumZ2, kSumSsr, kSumCount };
@@ -154,7 +163,14 @@ class FleetTarget final : public smc::TemperedModel {
   HyperVector theta_of(Eigen::Index particle) const;
   // One MH sweep over every older truck's latents of every particle, at φ = 1: a random walk on
   // (k, k_t, z), or (stiffness_from_prior) an independence proposal of (k, k_t) from p(· | θ).
-  void older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel, bool stiffness_from_prior);
+  // Sweeps the oldest `swept` kept trucks (all but the newest in a stage, all of them in
+  // rejuvenate); scales[j] is truck j's adapted proposal multiplier, updated here.
+  void older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel, bool stiffness_from_prior,
+                          Eigen::Index swept, std::vector<double>& scales);
+  // θ given the latents (the Gibbs and independence MH draws of custom_moves), at temperature φ
+  // for the newest truck's likelihood; writes every particle's log γ and ℓ.
+  void theta_moves(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
+                   Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik);
   // One MH sweep over ψ of every particle at φ = 1 (every kept truck re-simulated): a random
   // walk scaled on the cloud, or the extension's jump.
   enum class PsiMove { kRandomWalk, kJump };
@@ -169,6 +185,8 @@ class FleetTarget final : public smc::TemperedModel {
   Options options_;
   LateralRange lateral_;
   int sensors_ = 0;
+  // log p(θ) anywhere inside the prior box (PriorBounds::log_prior's sum of logs, computed once).
+  double log_prior_inside_ = 0.0;
   void retire_oldest_kept_truck();
 
   // Observed data per kept truck.
