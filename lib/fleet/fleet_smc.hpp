@@ -55,7 +55,7 @@ class FleetSmc {
   // smaller. Its random numbers come from the stage count, so call it once, after the last truck.
   // On the paper's 100-truck case (1024 particles, 8 seeds of `fit --final-sweeps N` on one log)
   // the smallest equivalent ESS (seed_scatter.hpp) was 27 (σ_k) without them, 132 after 20 sweeps
-  // and 409 after 50 (5 M passes, a third of the replay's 16 M, 4.5 s); the posterior mean of σ_kt
+  // and 409 after 50 (5.1 M passes, a third of the replay's 16.3 M; 5-6 s); the posterior mean of σ_kt
   // also rose from 171.6k to 177.3k, towards a long MCMC's 180.5k, so the stages alone leave it low.
   void rejuvenate(int sweeps);
 

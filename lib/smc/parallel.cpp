@@ -89,12 +89,14 @@ class WorkerPool {
         start_.wait(lock, fresh);
       }
       if (stop_.load(std::memory_order_acquire)) return;
-      const Eigen::Index chunks = [&] {
+      const std::function<void(Eigen::Index)>* job = nullptr;
+      Eigen::Index chunks = 0;
+      {
         std::lock_guard lock(mutex_);  // job_ and chunks_ were written under it
         seen = generation_.load(std::memory_order_relaxed);
-        return chunks_;
-      }();
-      const auto* job = job_;
+        job = job_;
+        chunks = chunks_;
+      }
       if (w < chunks) {
         inside_chunk = true;
         (*job)(w);
