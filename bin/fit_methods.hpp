@@ -15,14 +15,15 @@
 
 namespace ssrfleet::cli {
 
+// The SMC defaults are FleetSmc's own, so `fit` and the library cannot drift apart.
 struct FitFlags {
   long particles = 1024;
   int threads = 0;  // 0 = all cores
-  int older_sweeps = 2;
+  int older_sweeps = fleet::FleetSmc::Options{}.older_sweeps;
   int final_sweeps = fleet::FleetSmc::Options{}.final_sweeps;  // after the last truck (FleetSmc::rejuvenate)
   long window = 0;  // bounded memory (see stream --window)
-  double cess_target = 0.9;
-  int max_sweeps = 5;
+  double cess_target = fleet::FleetSmc::Options{}.sampler.tempering.cess_target;
+  int max_sweeps = fleet::FleetSmc::Options{}.sampler.mh.max_steps;
   long iterations = 20000;  // mcmc
   long burn_in = 5000;      // mcmc
   long thin = 10;           // mcmc
