@@ -39,6 +39,8 @@ int run_fit(int argc, const char* const argv[]) {
                      "usage: ssrfleet fit LOG [--road AS1|FILE] [--out posterior.json] [--particles P] [--seed K]")) {
     return 0;
   }
+  fit.final_sweeps_given = !vm["final-sweeps"].defaulted();
+  fit.max_sweeps_given = !vm["max-sweeps"].defaulted();
   const std::uint64_t seed = parse_seed(seed_text);
   if (method != "smc" && method != "mcmc") throw UsageError("--method '" + method + "': must be smc or mcmc");
 

@@ -51,8 +51,9 @@ int run_stream(int argc, const char* const argv[]) {
       ("particles", po::value(&particles)->default_value(particles), "number of particles P (>= 2)")
       ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (a resume must use the same one)")
-      ("window", po::value(&options.smc.window)->default_value(0),
-       "bounded memory: keep and move only the last W trucks' latents, older ones as sufficient statistics (0 = exact)")
+      ("window", po::value(&options.fit.latent.window)->default_value(0),
+       "bounded memory on the latent core: keep and move only the last W trucks' latents, older ones as sufficient "
+       "statistics (0 = the default exact marginal core, whose memory per truck is a table of a few KB)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   site_flags.add_to(desc);
   po::variables_map vm;
@@ -60,11 +61,13 @@ int run_stream(int argc, const char* const argv[]) {
                      "usage: ssrfleet stream --state DIR [--road AS1|FILE] [--input FILE] [--follow] [--report-every N]")) {
     return 0;
   }
-  options.smc.sampler.particles = particles;
-  options.smc.sampler.threads = threads > 0 ? threads : smc::TemperedSampler::Options::default_threads();
-  options.smc.sampler.seed = parse_seed(seed_text);
+  if (options.fit.latent.window < 0) throw UsageError("--window must be >= 0");
+  if (options.fit.latent.window > 0) options.fit.core = fleet::OnlineFitOptions::Core::kLatent;
+  options.fit.sampler().particles = particles;
+  options.fit.sampler().threads = threads > 0 ? threads : smc::TemperedSampler::Options::default_threads();
+  options.fit.sampler().seed = parse_seed(seed_text);
   std::string why;
-  if (!options.smc.sampler.IsValid(&why)) throw UsageError(why);
+  if (!options.fit.sampler().IsValid(&why)) throw UsageError(why);
   if (options.follow && input == "-") throw UsageError("--follow needs --input FILE (standard input follows by itself)");
 
   const site::Site site(site::load_road(road), site_flags.to_options());

@@ -8,22 +8,29 @@
 
 #include <boost/program_options.hpp>
 
-#include "fleet/fleet_smc.hpp"
+#include <string>
+
+#include "fleet/online_fit.hpp"
 #include "fleet/posterior_cloud.hpp"
 #include "io/wim_log.hpp"
 #include "site/site.hpp"
 
 namespace ssrfleet::cli {
 
-// The SMC defaults are FleetSmc's own, so `fit` and the library cannot drift apart.
+// The SMC defaults are the cores' own, so `fit` and the library cannot drift apart.
 struct FitFlags {
+  std::string core = "marginal";  // marginal (default) | latent
   long particles = 1024;
   int threads = 0;  // 0 = all cores
-  int older_sweeps = fleet::FleetSmc::Options{}.older_sweeps;
-  int final_sweeps = fleet::FleetSmc::Options{}.final_sweeps;  // after the last truck (FleetSmc::rejuvenate)
-  long window = 0;  // bounded memory (see stream --window)
-  double cess_target = fleet::FleetSmc::Options{}.sampler.tempering.cess_target;
-  int max_sweeps = fleet::FleetSmc::Options{}.sampler.mh.max_steps;
+  int older_sweeps = fleet::FleetSmc::Options{}.older_sweeps;  // latent core
+  // After the last truck, and per move phase at most: the marginal core's defaults, replaced by
+  // the latent core's when that core is chosen and the flag was not given.
+  int final_sweeps = fleet::MarginalSmc::Options{}.final_sweeps;
+  bool final_sweeps_given = false;
+  long window = 0;  // bounded memory on the latent core (see stream --window)
+  double cess_target = fleet::MarginalSmc::Options{}.sampler.tempering.cess_target;
+  int max_sweeps = fleet::MarginalSmc::Options{}.sampler.mh.max_steps;
+  bool max_sweeps_given = false;
   long iterations = 20000;  // mcmc
   long burn_in = 5000;      // mcmc
   long thin = 10;           // mcmc

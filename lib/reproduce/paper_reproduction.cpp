@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "fleet/fleet_distribution.hpp"
-#include "fleet/fleet_smc.hpp"
+#include "fleet/online_fit.hpp"
 #include "fleet/simulator.hpp"
 #include "io/atomic_file.hpp"
 #include "predict/ssr_prediction.hpp"
@@ -64,14 +64,15 @@ struct Writer {
 
 fleet::PosteriorCloud stream_fit(const site::Site& site, const std::vector<io::WimRecord>& records, const Options& o,
                                  const std::string& label,
-                                 const std::function<void(std::size_t, const fleet::FleetSmc&)>& after_each) {
-  fleet::FleetSmc::Options so;
-  so.sampler.particles = o.particles;
-  so.sampler.threads = o.threads > 0 ? o.threads : smc::TemperedSampler::Options::default_threads();
-  so.sampler.seed = o.seed;
+                                 const std::function<void(std::size_t, const fleet::OnlineFit&)>& after_each) {
+  fleet::OnlineFitOptions so;  // the default (marginal) core, as `fit` uses
+  so.sampler().particles = o.particles;
+  so.sampler().threads = o.threads > 0 ? o.threads : smc::TemperedSampler::Options::default_threads();
+  so.sampler().seed = o.seed;
   std::string why;
-  if (!so.sampler.IsValid(&why)) throw UsageError(why);
-  fleet::FleetSmc smc(site, so);
+  if (!so.sampler().IsValid(&why)) throw UsageError(why);
+  const auto fit = fleet::make_online_fit(site, so);
+  fleet::OnlineFit& smc = *fit;
   const auto start = Clock::now();
   const std::size_t every = records.size() <= 20 ? 1 : 10;
   for (std::size_t t = 0; t < records.size(); ++t) {
@@ -84,6 +85,8 @@ fleet::PosteriorCloud stream_fit(const site::Site& site, const std::vector<io::W
                   << std::defaultfloat;
     }
   }
+  // The same final rejuvenation as `fit`, so the figures come from a posterior of the same quality.
+  smc.rejuvenate(so.default_final_sweeps());
   return smc.cloud();
 }
 
@@ -173,9 +176,9 @@ Result run(const Options& o) {
   std::vector<std::array<fleet::ParameterSummary, fleet::kHyperCount>> history;
   std::vector<double> ess_history;
   const auto fit_start = Clock::now();
-  const auto cloud = stream_fit(site, records, o, "fit on AS1 (16 sensors)", [&](std::size_t, const fleet::FleetSmc& smc) {
+  const auto cloud = stream_fit(site, records, o, "fit on AS1 (16 sensors)", [&](std::size_t, const fleet::OnlineFit& smc) {
     const Eigen::ArrayXd w = smc.sampler().weights();
-    const auto v = fleet::summarise_weighted(smc.target().theta(), w);
+    const auto v = fleet::summarise_weighted(smc.cloud().theta, w);
     std::array<fleet::ParameterSummary, fleet::kHyperCount> a{};
     std::copy(v.begin(), v.end(), a.begin());
     history.push_back(a);

@@ -16,7 +16,7 @@ namespace ssrfleet::smc {
 namespace {
 
 // Purposes of the engine's streams (first key below the root).
-enum StreamPurpose : std::uint64_t { kModel = 1, kResample = 2, kMove = 3 };
+enum StreamPurpose : std::uint64_t { kModel = 1, kResample = 2, kMove = 3, kStandaloneMove = 4 };
 
 // Ceres-style rule checks: each failing rule writes "Options: <rule>" and returns false.
 #define SMC_OPTION_RULE(condition, text)   \
@@ -48,6 +48,9 @@ bool TemperedSampler::Options::IsValid(std::string* error) const {
   SMC_OPTION_RULE(mh.jump_target > 0.0 && mh.jump_target <= 1.0, "mh.jump_target must be in (0, 1]");
   SMC_OPTION_RULE(mh.min_steps >= 1, "mh.min_steps must be >= 1");
   SMC_OPTION_RULE(mh.max_steps >= mh.min_steps, "mh.max_steps must be >= mh.min_steps");
+  SMC_OPTION_RULE(mh.independence_df > 0.0, "mh.independence_df must be positive");
+  SMC_OPTION_RULE(mh.independence_inflation > 0.0 && std::isfinite(mh.independence_inflation),
+                  "mh.independence_inflation must be positive");
   if (error) error->clear();
   return true;
 }
@@ -73,6 +76,7 @@ void TemperedSampler::restore(const State& state) {
                      " particles but options.particles is " + std::to_string(options_.particles));
   }
   stages_run_ = state.stages_run;
+  moves_run_ = state.moves_run;
   log_evidence_ = state.log_evidence;
   log_weights_ = state.log_weights;
   history_.clear();
@@ -80,7 +84,7 @@ void TemperedSampler::restore(const State& state) {
 
 double TemperedSampler::ess() const { return effective_sample_size(weights()); }
 
-StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view label) {
+StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view label, bool counts_as_evidence) {
   const auto started = std::chrono::steady_clock::now();
   const Eigen::Index P = options_.particles;
   if (model.particles() != P) {
@@ -148,19 +152,21 @@ StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view l
       info.resampled = true;
     }
 
-    // 4. move at the new temperature.
-    info.mh = mh_moves(model, phi, Wnew, log_base, loglik, root_.child(kMove, stage_key, static_cast<std::uint64_t>(step)),
-                       parallel_, options_.mh, label);
-    check_loglik(loglik, label);  // custom moves may have written the cache
+    // 4. move at the new temperature (IBIS: only once resampling has duplicated particles).
+    if (options_.move_policy == Options::MovePolicy::kEveryStep || info.resampled) {
+      info.mh = mh_moves(model, phi, Wnew, log_base, loglik,
+                         root_.child(kMove, stage_key, static_cast<std::uint64_t>(step)), parallel_, options_.mh, label);
+      check_loglik(loglik, label);  // custom moves may have written the cache
+    }
 
     summary.steps.push_back(info);
-    summary.log_evidence = log_evidence_ + summary.log_evidence_increment;
+    summary.log_evidence = log_evidence_ + (counts_as_evidence ? summary.log_evidence_increment : 0.0);
     summary.final_ess = effective_sample_size(Wnew);
     summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     if (options_.progress) options_.progress(summary, summary.steps.back());
   }
 
-  log_evidence_ += summary.log_evidence_increment;
+  if (counts_as_evidence) log_evidence_ += summary.log_evidence_increment;
   summary.log_evidence = log_evidence_;
   ++stages_run_;
   summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
@@ -168,6 +174,21 @@ StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view l
   if (history_.size() >= kHistoryLimit) history_.erase(history_.begin());
   history_.push_back(summary);
   return summary;
+}
+
+MhSummary TemperedSampler::move(TemperedModel& model, std::string_view label, const MhOptions& mh) {
+  const Eigen::Index P = options_.particles;
+  if (model.particles() != P) throw UsageError("TemperedSampler::move: the model's particle count differs from options.particles");
+  Eigen::ArrayXd log_base(P), loglik(P);
+  model.log_density(log_base, loglik, parallel_);
+  check_loglik(loglik, label);
+  const Eigen::ArrayXd W = log_weights_.exp();
+  const MhSummary s = mh_moves(model, 1.0, W, log_base, loglik,
+                               root_.child(kStandaloneMove, static_cast<std::uint64_t>(stages_run_),
+                                           static_cast<std::uint64_t>(moves_run_)),
+                               parallel_, mh, label);
+  ++moves_run_;
+  return s;
 }
 
 int StageSummary::resamplings() const {
@@ -194,8 +215,11 @@ std::string StageSummary::FullReport() const {
        << s.relative_cess << "  " << std::setw(6) << std::setprecision(5) << s.ess << "  " << std::setw(9)
        << (s.resampled ? "yes" : "no") << "  " << std::setw(8) << std::setprecision(5)
        << s.log_evidence_increment << "  " << std::setw(6) << s.mh.sweeps;
-    for (std::size_t b = 0; b < s.mh.block_names.size(); ++b)
+    for (std::size_t b = 0; b < s.mh.block_names.size(); ++b) {
       os << "  " << s.mh.block_names[b] << " " << std::setprecision(3) << s.mh.acceptance[b] << "/" << s.mh.jump[b];
+      if (b < s.mh.independence_acceptance.size() && s.mh.independence_acceptance[b] >= 0.0)
+        os << " (independence " << s.mh.independence_acceptance[b] << ", " << s.mh.random_walk_steps[b] << " rw)";
+    }
     os << "\n";
   }
   return os.str();

@@ -76,6 +76,13 @@ class TemperedSampler {
     // Resample when ESS < ess_rmin · P (particles' ESSrmin); 0 never resamples, 1 always.
     double ess_rmin = 0.5;
     ResamplingScheme resampling = ResamplingScheme::systematic;
+    // When the MCMC moves run within a stage. kEveryStep moves after every tempering step (a
+    // latent-variable target whose newest latents need moving); kAfterResampling moves only when
+    // the step resampled, which is IBIS (Chopin 2002): a target whose only coordinates are static
+    // parameters needs rejuvenating only once resampling has duplicated particles, and the number
+    // of move phases then grows like log n, not n.
+    enum class MovePolicy { kEveryStep, kAfterResampling };
+    MovePolicy move_policy = MovePolicy::kEveryStep;
     TemperingOptions tempering;  // cess_target (default 0.9) and the bisection
     MhOptions mh;                // proposal scale and the number of MCMC sweeps
     ProgressCallback progress;   // called after every step if set; the library prints nothing
@@ -90,7 +97,15 @@ class TemperedSampler {
   // Tempers the model's current increment ℓ in, from φ = 0 to 1. Throws NumericalError naming
   // `label` (and the particle) on a NaN log density or a stalled tempering; UsageError if
   // model.particles() != options.particles.
-  StageSummary run_stage(TemperedModel& model, std::string_view label);
+  // A correction stage (counts_as_evidence = false) tempers in a change of the target that is not
+  // data, e.g. the ratio between two numerical approximations of one likelihood: it reweights,
+  // resamples and moves like any stage, but its increment is not added to log_evidence().
+  StageSummary run_stage(TemperedModel& model, std::string_view label, bool counts_as_evidence = true);
+
+  // MCMC sweeps at φ = 1 on the current cloud, outside any stage (e.g. rejuvenation after the last
+  // record): leaves the target and the weights unchanged. Random streams are keyed by the stage
+  // count and a per-call counter, so call it between stages only. Returns what the sweeps did.
+  MhSummary move(TemperedModel& model, std::string_view label, const MhOptions& mh);
 
   // Streams for the model's own draws before stage `stages_run()` (prior draws, new latents):
   // use model_rngs().stream(i) for particle i. Disjoint from the engine's streams.
@@ -113,8 +128,9 @@ class TemperedSampler {
     int stages_run = 0;
     double log_evidence = 0.0;
     Eigen::ArrayXd log_weights;
+    int moves_run = 0;  // calls of move() (their streams are keyed by it)
   };
-  State state() const { return {stages_run_, log_evidence_, log_weights_}; }
+  State state() const { return {stages_run_, log_evidence_, log_weights_, moves_run_}; }
   // UsageError if the weights do not match options().particles.
   void restore(const State& state);
 
@@ -123,6 +139,7 @@ class TemperedSampler {
   ParallelFor parallel_;
   RngFactory root_;
   int stages_run_ = 0;
+  int moves_run_ = 0;
   double log_evidence_ = 0.0;
   Eigen::ArrayXd log_weights_;
   std::vector<StageSummary> history_;

@@ -1,10 +1,12 @@
 #include "smc/mh_kernel.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
 
 #include <Eigen/Cholesky>
+#include <boost/random/chi_squared_distribution.hpp>
 #include <boost/random/normal_distribution.hpp>
 
 #include "util/errors.hpp"
@@ -15,6 +17,13 @@ namespace {
 
 // Stream key of the custom moves within a sweep (blocks use their index).
 constexpr std::uint64_t kCustomMovesKey = ~std::uint64_t{0};
+// Stream key of a block's independence step within a sweep (below the block's key).
+constexpr std::uint64_t kIndependenceKey = 0x1d;
+
+// log of the multivariate t density's kernel at a whitened offset (constants cancel in MH).
+inline double log_t_kernel(double squared_mahalanobis, double df, Eigen::Index d) {
+  return -0.5 * (df + static_cast<double>(d)) * std::log1p(squared_mahalanobis / df);
+}
 
 // log π_φ = log γ + φ ℓ, with 0 · (-inf) read as 0 (at φ = 0 the likelihood plays no part).
 inline double log_target(double log_base, double loglik, double phi) {
@@ -54,7 +63,10 @@ Eigen::MatrixXd proposal_covariance(const Eigen::Ref<const Eigen::MatrixXd>& X,
     throw NumericalError("proposal_covariance: the weighted covariance of the cloud is not finite");
   if (!(mean_variance > 0.0))
     throw NumericalError("proposal_covariance: the particle cloud has collapsed to one point (zero spread)");
-  cov.diagonal().array() += 1e-10 * mean_variance;
+  // A relative ridge per coordinate: coordinates of a block may differ in scale by many orders of
+  // magnitude (a stiffness in N/m beside a log-sd), so a ridge scaled on the mean variance would
+  // swamp the small ones. A coordinate that has collapsed gets a ridge 1e-20 of the mean variance.
+  for (Eigen::Index k = 0; k < d; ++k) cov(k, k) += 1e-10 * std::max(cov(k, k), 1e-10 * mean_variance);
   return (scale * scale / static_cast<double>(d)) * cov;
 }
 
@@ -103,19 +115,74 @@ MhSummary mh_moves(TemperedModel& model, double phi, const Eigen::Ref<const Eige
     cloud[b].compute(cov * (static_cast<double>(d) / (options.scale * options.scale)));
   }
 
+  // The independence proposal of each block: t_df(mean, (inflation² Σ̂)), Σ̂ the cloud's covariance.
+  std::vector<Eigen::VectorXd> cloud_mean(nb);
+  std::vector<Eigen::MatrixXd> chol_independent(nb);
+  for (std::size_t b = 0; b < nb && options.independence; ++b) {
+    cloud_mean[b] = start[b] * W.matrix() / W.sum();
+    chol_independent[b] = options.independence_inflation * Eigen::MatrixXd(cloud[b].matrixL());
+  }
+
   Eigen::MatrixXd current, proposed;
-  Eigen::ArrayXd new_base(P), new_loglik(P), log_u(P);
+  Eigen::ArrayXd new_base(P), new_loglik(P), log_u(P), log_q_ratio(P);
   std::vector<char> accepted(static_cast<std::size_t>(P));
   std::vector<double> accepted_sum(nb, 0.0);
   std::vector<double> factor(nb, 1.0);
+  std::vector<double> independence_sum(nb, 0.0), last_independence(nb, 1.0);
+  std::vector<int> rw_steps(nb, 0);
+
+  // One MH step of block b on every particle: proposals already in `proposed`, log_q_ratio the
+  // log q(x) - log q(x') term (0 for a symmetric proposal). Returns the acceptance rate.
+  auto mh_step = [&](std::size_t b) {
+    model.log_density_at(static_cast<int>(b), proposed, new_base, new_loglik, parallel);
+    check_proposals(new_base, new_loglik, blocks[b], stage_label);
+    Eigen::Index n_accepted = 0;
+    for (Eigen::Index i = 0; i < P; ++i) {
+      const double log_ratio =
+          log_target(new_base[i], new_loglik[i], phi) - log_target(log_base[i], loglik[i], phi) + log_q_ratio[i];
+      const bool ok = log_u[i] < log_ratio;  // NaN (-inf - -inf) rejects
+      accepted[static_cast<std::size_t>(i)] = ok ? 1 : 0;
+      if (ok) {
+        log_base[i] = new_base[i];
+        loglik[i] = new_loglik[i];
+        ++n_accepted;
+      }
+    }
+    model.accept(static_cast<int>(b), accepted, proposed);
+    return static_cast<double>(n_accepted) / static_cast<double>(P);
+  };
 
   for (int sweep = 0; sweep < options.max_steps; ++sweep) {
     for (std::size_t b = 0; b < nb; ++b) {
       const Eigen::Index d = blocks[b].dim;
       current.resize(d, P);
       proposed.resize(d, P);
-      model.get_block(static_cast<int>(b), current);
       const RngFactory block_rngs = rngs.child(static_cast<std::uint64_t>(sweep), static_cast<std::uint64_t>(b));
+      if (options.independence) {
+        model.get_block(static_cast<int>(b), current);
+        const RngFactory ind_rngs = block_rngs.child(kIndependenceKey);
+        const Eigen::MatrixXd& Li = chol_independent[b];
+        const double df = options.independence_df;
+        parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+          boost::random::normal_distribution<double> normal;
+          boost::random::chi_squared_distribution<double> chi2(df);
+          Eigen::VectorXd z(d);
+          for (Eigen::Index i = begin; i < end; ++i) {
+            Rng rng = ind_rngs.stream(static_cast<std::uint64_t>(i));
+            for (Eigen::Index k = 0; k < d; ++k) z[k] = normal(rng);
+            const double w = chi2(rng) / df;
+            proposed.col(i) = cloud_mean[b] + Li.triangularView<Eigen::Lower>() * z / std::sqrt(w);
+            const double q_new = z.squaredNorm() / w;
+            const Eigen::VectorXd cur = Li.triangularView<Eigen::Lower>().solve(current.col(i) - cloud_mean[b]);
+            log_q_ratio[i] = log_t_kernel(cur.squaredNorm(), df, d) - log_t_kernel(q_new, df, d);
+            log_u[i] = std::log(uniform01(rng));
+          }
+        });
+        last_independence[b] = mh_step(b);
+        independence_sum[b] += last_independence[b];
+        if (last_independence[b] >= options.independence_min_acceptance) continue;  // no random walk needed
+      }
+      model.get_block(static_cast<int>(b), current);
       const Eigen::MatrixXd L = factor[b] * chol_proposal[b];
       parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
         boost::random::normal_distribution<double> normal;
@@ -127,21 +194,9 @@ MhSummary mh_moves(TemperedModel& model, double phi, const Eigen::Ref<const Eige
           log_u[i] = std::log(uniform01(rng));
         }
       });
-      model.log_density_at(static_cast<int>(b), proposed, new_base, new_loglik, parallel);
-      check_proposals(new_base, new_loglik, blocks[b], stage_label);
-      Eigen::Index n_accepted = 0;
-      for (Eigen::Index i = 0; i < P; ++i) {
-        const double log_ratio = log_target(new_base[i], new_loglik[i], phi) - log_target(log_base[i], loglik[i], phi);
-        const bool ok = log_u[i] < log_ratio;  // NaN (-inf - -inf) rejects
-        accepted[static_cast<std::size_t>(i)] = ok ? 1 : 0;
-        if (ok) {
-          log_base[i] = new_base[i];
-          loglik[i] = new_loglik[i];
-          ++n_accepted;
-        }
-      }
-      model.accept(static_cast<int>(b), accepted, proposed);
-      const double rate = static_cast<double>(n_accepted) / static_cast<double>(P);
+      log_q_ratio.setZero();
+      const double rate = mh_step(b);
+      ++rw_steps[b];
       accepted_sum[b] += rate;
       if (options.adapt_scale) factor[b] = tuned_scale_factor(factor[b], rate);
     }
@@ -162,7 +217,12 @@ MhSummary mh_moves(TemperedModel& model, double phi, const Eigen::Ref<const Eige
     }
     if (summary.sweeps >= options.min_steps && far_enough) break;
   }
-  for (std::size_t b = 0; b < nb; ++b) summary.acceptance[b] = accepted_sum[b] / summary.sweeps;
+  for (std::size_t b = 0; b < nb; ++b) {
+    // Acceptance of the random-walk steps (or of the independence steps if no random walk ran).
+    summary.acceptance[b] = rw_steps[b] > 0 ? accepted_sum[b] / rw_steps[b] : independence_sum[b] / summary.sweeps;
+    summary.independence_acceptance.push_back(options.independence ? independence_sum[b] / summary.sweeps : -1.0);
+    summary.random_walk_steps.push_back(rw_steps[b]);
+  }
   summary.scale_factor = factor;
   return summary;
 }

@@ -40,6 +40,18 @@ struct MhOptions {
   // tied to θ) still moves. The factor depends only on population averages of earlier sweeps,
   // so every sweep is a π_φ-invariant kernel and the result does not depend on thread count.
   bool adapt_scale = true;
+  // Independence proposals (Chopin 2002's choice for IBIS): each sweep first proposes, for every
+  // particle, a fresh draw from a multivariate t with `independence_df` degrees of freedom, centred
+  // on the cloud's weighted mean with its weighted covariance times independence_inflation², and
+  // accepts by the MH ratio with the proposal densities. Once the cloud is near its target (a
+  // static-parameter posterior after a few records is close to Gaussian) most proposals are
+  // accepted and each acceptance is an almost independent draw: the jump target is met in one or
+  // two sweeps where a random walk in d dimensions needs ~3d. The random-walk step still runs in a
+  // sweep whenever the last independence step accepted fewer than `independence_min_acceptance`.
+  bool independence = false;
+  double independence_df = 10.0;
+  double independence_inflation = 1.2;
+  double independence_min_acceptance = 0.3;
 };
 
 struct MhSummary {
@@ -48,6 +60,10 @@ struct MhSummary {
   std::vector<double> acceptance;  // per block: mean acceptance rate over particles and sweeps
   std::vector<double> jump;        // per block: the final jump_b (see above)
   std::vector<double> scale_factor;  // per block: the adapted multiplier of the proposal at the end
+  // Per block, with MhOptions::independence: the mean acceptance of the independence steps (-1
+  // without them), and how many random-walk steps ran.
+  std::vector<double> independence_acceptance;
+  std::vector<int> random_walk_steps;
 };
 
 // The next proposal multiplier given the acceptance rate of the last sweep (PyMC's tune table).

@@ -22,7 +22,7 @@ std::string path_in(const std::string& dir, const char* name) { return (fs::path
 }  // namespace
 
 WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream* progress, std::ostream& reports)
-    : site_(site), options_(std::move(options)), progress_(progress), reports_(reports), smc_(site, options_.smc) {
+    : site_(site), options_(std::move(options)), progress_(progress), reports_(reports), smc_(fleet::make_online_fit(site, options_.fit)) {
   if (options_.state_dir.empty()) throw UsageError("stream: a state directory is required (--state DIR)");
   if (options_.report_every < 0) throw UsageError("stream: --report-every must be >= 0");
   std::error_code ec;
@@ -35,7 +35,7 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   std::ifstream in(checkpoint, std::ios::binary);
   if (!in) throw IoError("stream: cannot read '" + checkpoint + "'");
   io::BinaryReader reader(in, checkpoint);
-  smc_.restore(reader);
+  smc_->restore(reader);
   checkpoint_source_ = reader.text("source");
   checkpoint_lines_ = reader.value<std::uint64_t>("lines_consumed");
   rejects_bytes_ = reader.value<std::uint64_t>("rejects_bytes");
@@ -45,25 +45,25 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   const std::string rejects = path_in(options_.state_dir, "rejects.csv");
   if (fs::exists(rejects) && fs::file_size(rejects) > rejects_bytes_) fs::resize_file(rejects, rejects_bytes_);
   if (progress_) {
-    *progress_ << "stream: resumed from " << checkpoint << " with " << smc_.trucks_seen() << " trucks absorbed\n";
+    *progress_ << "stream: resumed from " << checkpoint << " with " << smc_->trucks_seen() << " trucks absorbed\n";
   }
 }
 
 void WimStream::save_state(const std::string& source, std::size_t lines_consumed) const {
   io::write_file_atomically(path_in(options_.state_dir, "checkpoint.bin"), [&](std::ostream& os) {
     io::BinaryWriter out(os);
-    smc_.save(out);
+    smc_->save(out);
     out.text(source);
     out.value<std::uint64_t>(lines_consumed);
     out.value<std::uint64_t>(rejects_bytes_);
   });
-  io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), smc_.cloud());
+  io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), smc_->cloud());
 }
 
 void WimStream::report() const {
-  if (smc_.trucks_seen() == 0) return;
-  const auto prediction = predict::predict_ssr(smc_.cloud(), site_, {}, options_.prediction);
-  reports_ << "# SSR prediction after " << smc_.trucks_seen() << " trucks\n";
+  if (smc_->trucks_seen() == 0) return;
+  const auto prediction = predict::predict_ssr(smc_->cloud(), site_, {}, options_.prediction);
+  reports_ << "# SSR prediction after " << smc_->trucks_seen() << " trucks\n";
   predict::write_prediction_csv(reports_, prediction);
   reports_.flush();
 }
@@ -77,7 +77,7 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
   }
   reader.set_follow(options_.follow);
   const bool same_source = resumed_ && source == checkpoint_source_;
-  const std::unordered_set<std::string> absorbed_before(smc_.truck_ids().begin(), smc_.truck_ids().end());
+  const std::unordered_set<std::string> absorbed_before(smc_->truck_ids().begin(), smc_->truck_ids().end());
 
   const std::string rejects_path = path_in(options_.state_dir, "rejects.csv");
   std::ofstream rejects(rejects_path, std::ios::app | std::ios::binary);
@@ -115,19 +115,21 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
       ++counts.skipped;
       continue;
     }
-    const auto& stage = smc_.absorb(record);
+    const auto& stage = smc_->absorb(record);
     ++counts.absorbed;
     save_state(source, line);
     if (progress_) {
-      *progress_ << "stream: truck " << smc_.trucks_seen() << " " << record.truck_id << " (line " << line << "): "
-                 << stage.steps.size() << " steps, ESS " << std::fixed << std::setprecision(0) << smc_.sampler().ess()
-                 << ", " << std::setprecision(3) << stage.wall_time_s << " s\n";
+      *progress_ << "stream: truck " << smc_->trucks_seen() << " " << record.truck_id << " (line " << line << "): "
+                 << stage.steps.size() << " steps, ESS " << std::fixed << std::setprecision(0) << smc_->sampler().ess()
+                 << ", " << std::setprecision(3) << stage.wall_time_s << " s";
+      const std::string note = smc_->note();
+      *progress_ << (note.empty() ? "" : "; ") << note << "\n";
       progress_->unsetf(std::ios::floatfield);
     }
-    if (options_.report_every > 0 && smc_.trucks_seen() % options_.report_every == 0) report();
+    if (options_.report_every > 0 && smc_->trucks_seen() % options_.report_every == 0) report();
   }
   report();
-  counts.total_absorbed = smc_.trucks_seen();
+  counts.total_absorbed = smc_->trucks_seen();
   return counts;
 }
 

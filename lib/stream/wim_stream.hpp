@@ -3,7 +3,7 @@
 // always holds a consistent posterior and a checkpoint to resume from.
 //
 // State directory:
-//   checkpoint.bin   everything the next truck depends on (FleetSmc::save) plus the stream's
+//   checkpoint.bin   everything the next truck depends on (OnlineFit::save) plus the stream's
 //                    own bookkeeping; rewritten atomically after every absorbed truck
 //   posterior.json   the posterior file `predict --posterior DIR` reads; rewritten atomically
 //   rejects.csv      every rejected record verbatim, each after a '# line N: reason' comment, under
@@ -21,7 +21,9 @@
 #include <ostream>
 #include <string>
 
-#include "fleet/fleet_smc.hpp"
+#include <memory>
+
+#include "fleet/online_fit.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/site.hpp"
 
@@ -32,7 +34,7 @@ struct StreamOptions {
   int report_every = 0;         // print the SSR table every N absorbed trucks (0 = only at the end)
   bool follow = false;          // at end of input, wait for more (like tail -f) until stopped
   double follow_poll_s = 0.25;  // how often to look for more input in follow mode
-  fleet::FleetSmc::Options smc;
+  fleet::OnlineFitOptions fit;  // the core (marginal by default) and its sampler options
   predict::PredictionOptions prediction;
 };
 
@@ -64,7 +66,7 @@ class WimStream {
   StreamOptions options_;
   std::ostream* progress_;
   std::ostream& reports_;
-  fleet::FleetSmc smc_;
+  std::unique_ptr<fleet::OnlineFit> smc_;
   bool resumed_ = false;
   // Bookkeeping restored from the checkpoint.
   std::string checkpoint_source_;

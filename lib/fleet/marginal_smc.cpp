@@ -1,0 +1,117 @@
+#include "fleet/marginal_smc.hpp"
+
+#include <tuple>
+
+#include "util/errors.hpp"
+
+namespace ssrfleet::fleet {
+
+namespace {
+MarginalTarget::Options with_particles(MarginalTarget::Options t, Eigen::Index particles) {
+  t.particles = particles;
+  return t;
+}
+constexpr std::uint64_t kInitialDraws = 0;
+}  // namespace
+
+MarginalSmc::MarginalSmc(const site::Site& site, Options options)
+    : site_(site),
+      options_(std::move(options)),
+      target_(site, with_particles(options_.target, options_.sampler.particles)),
+      sampler_(options_.sampler),
+      parallel_(options_.sampler.threads) {
+  target_.initialise(sampler_.model_rngs().child(kInitialDraws));
+}
+
+smc::StageSummary MarginalSmc::absorb(const io::WimRecord& record) {
+  target_.add_truck(record.speed_mps, record.sprung_mass_kg, record.impact_factor, sampler_.weights(), parallel_);
+  truck_ids_.push_back(record.truck_id);
+  smc::StageSummary truck = sampler_.run_stage(
+      target_, "truck '" + record.truck_id + "' (#" + std::to_string(target_.trucks()) + ")");
+  target_.finish_stage();
+  last_rebuild_ = target_.rebuild_reason(sampler_.weights());
+  if (!last_rebuild_.empty()) {
+    target_.begin_rebuild(sampler_.weights(), parallel_);
+    sampler_.run_stage(target_, "tables rebuilt: " + last_rebuild_, /*counts_as_evidence=*/false);
+    target_.finish_stage();
+  }
+  return truck;
+}
+
+smc::MhSummary MarginalSmc::rejuvenate(int sweeps) {
+  if (sweeps < 0) throw UsageError("MarginalSmc::rejuvenate: sweeps must be >= 0");
+  if (sweeps == 0) return {};
+  smc::MhOptions mh = options_.sampler.mh;
+  mh.min_steps = sweeps;
+  mh.max_steps = sweeps;
+  return sampler_.move(target_, "final rejuvenation", mh);
+}
+
+PosteriorCloud MarginalSmc::cloud() const {
+  PosteriorCloud c;
+  c.method = "smc";
+  c.theta = target_.theta();
+  c.weights = sampler_.weights();
+  c.speed_mps = target_.speed_mps();
+  c.sprung_mass_kg = target_.sprung_mass_kg();
+  c.site_fingerprint = site_.fingerprint();
+  c.road_name = site_.surface().name;
+  c.sensors = site_.sensors();
+  c.lateral_min_m = site_.lateral_min_m();
+  c.lateral_max_m = site_.lateral_max_m();
+  c.trucks_seen = trucks_seen();
+  c.ess = sampler_.ess();
+  c.log_evidence = sampler_.log_evidence();
+  return c;
+}
+
+namespace {
+constexpr std::uint64_t kCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT", as FleetSmc's
+// Version 1 was the latent-variable core (FleetSmc); version 2 is this one.
+constexpr std::uint32_t kCheckpointVersion = 2;
+}  // namespace
+
+void MarginalSmc::save(io::BinaryWriter& out) const {
+  out.value(kCheckpointMagic);
+  out.value(kCheckpointVersion);
+  out.text(site_.fingerprint());
+  out.value<std::uint64_t>(sampler_.options().seed);
+  const auto state = sampler_.state();
+  out.value<std::int32_t>(state.stages_run);
+  out.value<std::int32_t>(state.moves_run);
+  out.value(state.log_evidence);
+  out.matrix(state.log_weights.matrix());
+  out.value<std::uint64_t>(truck_ids_.size());
+  for (const auto& id : truck_ids_) out.text(id);
+  target_.save(out);
+}
+
+void MarginalSmc::restore(io::BinaryReader& in) {
+  if (in.value<std::uint64_t>("magic") != kCheckpointMagic) in.fail("magic", "not an ssrfleet checkpoint");
+  const auto version = in.value<std::uint32_t>("version");
+  if (version == 1) {
+    in.fail("version", "checkpoint format version 1 was written by the latent-variable core of ssrfleet 0.1; this "
+                       "build's core reads version 2: replay the log into a new state");
+  }
+  if (version != kCheckpointVersion) in.fail("version", "unsupported checkpoint format version " + std::to_string(version));
+  if (in.text("site") != site_.fingerprint()) {
+    in.fail("site", "the checkpoint belongs to another site (road or site options differ)");
+  }
+  if (in.value<std::uint64_t>("seed") != sampler_.options().seed) {
+    in.fail("seed", "the checkpoint was made with another seed; resume with the seed it started with");
+  }
+  smc::TemperedSampler::State state;
+  state.stages_run = in.value<std::int32_t>("stages_run");
+  state.moves_run = in.value<std::int32_t>("moves_run");
+  state.log_evidence = in.value<double>("log_evidence");
+  state.log_weights = in.matrix("log_weights", sampler_.options().particles, 1).array();
+  const auto n = in.value<std::uint64_t>("truck_ids");
+  if (n > 100'000'000) in.fail("truck_ids", "implausible truck count");
+  truck_ids_.clear();
+  for (std::uint64_t j = 0; j < n; ++j) truck_ids_.push_back(in.text("truck_id"));
+  target_.load(in);
+  if (n != static_cast<std::uint64_t>(target_.trucks())) in.fail("trucks", "truck ids and tables disagree");
+  sampler_.restore(state);
+}
+
+}  // namespace ssrfleet::fleet

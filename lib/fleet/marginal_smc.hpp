@@ -1,0 +1,71 @@
+// Online fleet inference on the marginal core (DESIGN.md §4): each WIM record is one IBIS stage
+// over the 7 hyperparameters, its likelihood ℓ_n(θ) read from the table built when it arrives
+// (marginal_target.hpp). MCMC moves run only after a resampling, so move phases come a few times
+// per doubling of n and the cost per truck stays flat. When the posterior has moved away from the
+// settings the tables were built for, the tables are rebuilt and the change tempered in as a
+// correction stage (not counted in the evidence).
+#pragma once
+
+#include <deque>
+#include <string>
+
+#include "fleet/marginal_target.hpp"
+#include "fleet/posterior_cloud.hpp"
+#include "io/binary_io.hpp"
+#include "io/wim_log.hpp"
+#include "site/site.hpp"
+#include "smc/engine.hpp"
+
+namespace ssrfleet::fleet {
+
+class MarginalSmc {
+ public:
+  struct Options {
+    // IBIS: move only after resampling. Each sweep proposes independently from a t fitted to the
+    // cloud (a random-walk step is added while that accepts too little, as for the first trucks);
+    // sweeps repeat until the cloud has moved half a posterior sd per coordinate
+    // (mh.jump_target), at most max_steps.
+    smc::TemperedSampler::Options sampler = [] {
+      smc::TemperedSampler::Options o;
+      o.particles = 1024;
+      o.move_policy = smc::TemperedSampler::Options::MovePolicy::kAfterResampling;
+      o.mh.max_steps = 30;
+      o.mh.independence = true;
+      return o;
+    }();
+    MarginalTarget::Options target;  // its particles follow sampler.particles
+    // Sweeps of rejuvenate() after an offline replay's last truck (fit): each independence sweep
+    // replaces about half the particles by fresh draws (acceptance ~0.55 on the paper's case).
+    int final_sweeps = 3;
+  };
+
+  MarginalSmc(const site::Site& site, Options options);
+
+  // Tempers the record's likelihood in (and rebuilds the tables if the posterior asks for it).
+  // Returns the record's stage summary.
+  smc::StageSummary absorb(const io::WimRecord& record);
+  // MCMC sweeps at φ = 1 (the posterior is unchanged; the cloud's duplicates spread out).
+  smc::MhSummary rejuvenate(int sweeps);
+
+  long trucks_seen() const { return static_cast<long>(target_.trucks()); }
+  const MarginalTarget& target() const { return target_; }
+  const smc::TemperedSampler& sampler() const { return sampler_; }
+  PosteriorCloud cloud() const;
+  const std::deque<std::string>& truck_ids() const { return truck_ids_; }
+  // What the last absorb() rebuilt, if anything ("" = nothing).
+  const std::string& last_rebuild() const { return last_rebuild_; }
+
+  void save(io::BinaryWriter& out) const;
+  void restore(io::BinaryReader& in);
+
+ private:
+  const site::Site& site_;
+  Options options_;
+  MarginalTarget target_;
+  smc::TemperedSampler sampler_;
+  smc::ParallelFor parallel_;
+  std::deque<std::string> truck_ids_;
+  std::string last_rebuild_;
+};
+
+}  // namespace ssrfleet::fleet

@@ -1,0 +1,454 @@
+#include "fleet/marginal_target.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <sstream>
+
+#include "util/errors.hpp"
+
+namespace ssrfleet::fleet {
+
+namespace {
+
+constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+
+// The moves' coordinates: the four scale parameters on the log scale, where the early posterior's
+// funnels (a fleet sd near zero against a broad one) become walkable and a random walk scaled on
+// the cloud's covariance fits the shape. Uniform priors on σ give a density σ on log σ.
+constexpr bool kLogScale[kHyperCount] = {false, true, false, true, false, true, true};
+
+HyperVector from_move_coordinates(const Eigen::Ref<const Eigen::MatrixXd>& x, Eigen::Index p) {
+  HyperVector t;
+  for (int j = 0; j < kHyperCount; ++j) t[static_cast<std::size_t>(j)] = kLogScale[j] ? std::exp(x(j, p)) : x(j, p);
+  return t;
+}
+
+double log_jacobian(const HyperVector& t) {
+  double s = 0.0;
+  for (int j = 0; j < kHyperCount; ++j)
+    if (kLogScale[j]) s += std::log(t[static_cast<std::size_t>(j)]);
+  return s;
+}
+
+// Weighted quantile of one row of the cloud.
+double weighted_quantile(const Eigen::Ref<const Eigen::RowVectorXd>& x, const Eigen::ArrayXd& W, double q) {
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(x.size()));
+  std::iota(order.begin(), order.end(), Eigen::Index{0});
+  std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return x[a] < x[b]; });
+  double acc = 0.0;
+  for (Eigen::Index i : order) {
+    acc += W[i];
+    if (acc >= q) return x[i];
+  }
+  return x[order.back()];
+}
+
+}  // namespace
+
+MarginalTarget::MarginalTarget(const site::Site& site, Options options)
+    : site_(site),
+      options_(std::move(options)),
+      lateral_{site.lateral_min_m(), site.lateral_max_m()},
+      marginal_(site.sensors(), lateral_, model::Lattice{}) {
+  if (options_.particles < 2) throw UsageError("MarginalTarget: particles must be >= 2");
+  if (!(options_.lattice_fraction > 0.0 && options_.lattice_fraction <= 1.5)) {
+    throw UsageError("MarginalTarget: lattice_fraction must be in (0, 1.5]");
+  }
+  theta_.resize(kHyperCount, options_.particles);
+  base_sum_ = Eigen::ArrayXd::Zero(options_.particles);
+  inc_ = Eigen::ArrayXd::Zero(options_.particles);
+  proposed_base_sum_ = inc_;
+  proposed_inc_ = inc_;
+}
+
+void MarginalTarget::initialise(const smc::RngFactory& rngs) {
+  const auto& prior = options_.prior;
+  for (Eigen::Index i = 0; i < options_.particles; ++i) {
+    smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+    for (int j = 0; j < kHyperCount; ++j) theta_(j, i) = prior.lo[j] + (prior.hi[j] - prior.lo[j]) * smc::uniform01(rng);
+  }
+  base_sum_.setZero();
+  inc_.setZero();
+  mode_ = Mode::kIdle;
+}
+
+HyperVector MarginalTarget::theta_of(Eigen::Index p) const {
+  HyperVector t;
+  for (int j = 0; j < kHyperCount; ++j) t[static_cast<std::size_t>(j)] = theta_(j, p);
+  return t;
+}
+
+double MarginalTarget::sum_loglik(const model::TableStore& store, const model::FleetMarginal& marginal,
+                                  std::size_t end, const HyperVector& theta) const {
+  const model::ThetaTerms terms = marginal.prepare(theta);
+  if (!terms.inside) return kNegInf;
+  double s = 0.0;
+  for (std::size_t i = 0; i < end; ++i) {
+    s += marginal.log_likelihood(store.view(i), terms);
+    if (s == kNegInf) return s;
+  }
+  return s;
+}
+
+double MarginalTarget::log_posterior(const HyperVector& theta) const {
+  const double lp = options_.prior.log_prior(theta);
+  if (lp == kNegInf) return lp;
+  return lp + sum_loglik(store_, marginal_, store_.trucks(), theta);
+}
+
+MarginalTarget::TableSettings MarginalTarget::ideal_settings(const Eigen::ArrayXd& W) const {
+  TableSettings s = settings_;
+  const Eigen::Index n = trucks();
+  // σ_ref: the posterior mean of σ_IF.
+  s.sigma_ref = (theta_.row(kSigmaIf).array().transpose() * W).sum();
+  // Integrand width in k: the likelihood sd at σ_ref (geometric mean over trucks) combined with
+  // the fleet sd (posterior median; particles far below it meet FleetMarginal's floor).
+  double log_sk = 0.0, log_skt = 0.0;
+  for (const auto& f : fits_) {
+    log_sk += std::log(f.stiffness_sd_per_sigma);
+    log_skt += std::log(f.tyre_stiffness_sd_per_sigma);
+  }
+  const double lik_k = std::exp(log_sk / static_cast<double>(n)) * s.sigma_ref;
+  const double lik_kt = std::exp(log_skt / static_cast<double>(n)) * s.sigma_ref;
+  const double fleet_k = weighted_quantile(theta_.row(kSigmaK), W, 0.5);
+  const double fleet_kt = weighted_quantile(theta_.row(kSigmaKt), W, 0.5);
+  const double width_k = 1.0 / std::sqrt(1.0 / (lik_k * lik_k) + 1.0 / (fleet_k * fleet_k));
+  const double width_kt = 1.0 / std::sqrt(1.0 / (lik_kt * lik_kt) + 1.0 / (fleet_kt * fleet_kt));
+  s.lattice.dk_npm = options_.lattice_fraction * width_k;
+  s.lattice.dkt_npm = options_.lattice_fraction * width_kt;
+  // The posterior predictive of (k, k_t), widened.
+  model::TruckTableOptions::Population pop;
+  const Eigen::ArrayXd K = theta_.row(kK).transpose().array(), Kt = theta_.row(kKt).transpose().array();
+  const Eigen::ArrayXd sk = theta_.row(kSigmaK).transpose().array(), skt = theta_.row(kSigmaKt).transpose().array();
+  pop.k_mean_npm = (W * K).sum();
+  pop.kt_mean_npm = (W * Kt).sum();
+  pop.k_sd_npm = options_.population_widening * std::sqrt((W * (sk.square() + (K - pop.k_mean_npm).square())).sum());
+  pop.kt_sd_npm =
+      options_.population_widening * std::sqrt((W * (skt.square() + (Kt - pop.kt_mean_npm).square())).sum());
+  s.population = pop;
+  return s;
+}
+
+model::TruckTableOptions MarginalTarget::table_options(const TableSettings& s) const {
+  model::TruckTableOptions o = options_.table;
+  o.sigma_ref = s.sigma_ref;
+  o.population = s.population;
+  // Start the best-fit search at the fleet's predictive mean once that is a guide (a broad
+  // predictive, as for the first trucks, is not: the search then spreads its start).
+  if (s.population && s.population->k_sd_npm < 0.3 * s.population->k_mean_npm &&
+      s.population->kt_sd_npm < 0.3 * s.population->kt_mean_npm) {
+    o.k_start_npm = s.population->k_mean_npm;
+    o.kt_start_npm = s.population->kt_mean_npm;
+    o.start_is_close = true;
+  }
+  return o;
+}
+
+void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Eigen::VectorXd& impact_factors,
+                               const Eigen::ArrayXd& W, const smc::ParallelFor& parallel) {
+  if (mode_ != Mode::kIdle) throw std::logic_error("MarginalTarget::add_truck: finish_stage() was not called");
+  if (impact_factors.size() != site_.sensors()) {
+    throw DataError("record", 0, "impact factors",
+                    "has " + std::to_string(impact_factors.size()) + " values but the site has " +
+                        std::to_string(site_.sensors()) + " sensors");
+  }
+  TableSettings now = settings_;
+  if (trucks() > 0) {
+    // Only the population follows every truck; lattice and σ_ref change by rebuilds alone, so that
+    // every table in the store shares them.
+    now.population = ideal_settings(W).population;
+  }
+  model::TruckTableOptions o = table_options(now);
+  if (trucks() == 0) o.population.reset();
+  const model::TruckFit fit = model::fit_truck(site_, speed_mps, sprung_mass_kg, impact_factors, o);
+  if (trucks() == 0) {
+    // The first truck sets the lattice's origin and first spacing, and σ_ref (its own noise
+    // estimate, inside the prior box); the rebuild rule corrects both as the posterior forms.
+    settings_.sigma_ref = std::clamp(fit.sigma_hat, options_.prior.lo[kSigmaIf], options_.prior.hi[kSigmaIf]);
+    settings_.lattice.k_origin_npm = fit.stiffness_npm;
+    settings_.lattice.kt_origin_npm = fit.tyre_stiffness_npm;
+    // Integrand width unknown yet: assume the fleet spread is about the likelihood's (width / √2).
+    settings_.lattice.dk_npm = options_.lattice_fraction * fit.stiffness_sd_per_sigma * settings_.sigma_ref / std::sqrt(2.0);
+    settings_.lattice.dkt_npm =
+        options_.lattice_fraction * fit.tyre_stiffness_sd_per_sigma * settings_.sigma_ref / std::sqrt(2.0);
+    marginal_ = model::FleetMarginal(site_.sensors(), lateral_, settings_.lattice);
+    o.sigma_ref = settings_.sigma_ref;
+  }
+  const util::ParallelRange range = [&parallel](Eigen::Index n, const util::RangeBody& body) { parallel(n, body); };
+  const model::TruckTable table =
+      model::build_truck_table(site_, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
+  passes_ += table.passes;
+  store_.append(table);
+  speed_mps_.push_back(speed_mps);
+  sprung_mass_kg_.push_back(sprung_mass_kg);
+  observed_if_.push_back(impact_factors);
+  fits_.push_back(fit);
+  mode_ = Mode::kTruck;
+}
+
+std::string MarginalTarget::rebuild_reason(const Eigen::ArrayXd& W) const {
+  const Eigen::Index n = trucks();
+  if (n < 2 || mode_ != Mode::kIdle) return "";
+  if (static_cast<double>(n) < options_.rebuild_growth * static_cast<double>(trucks_at_last_rebuild_)) return "";
+  const TableSettings ideal = ideal_settings(W);
+  std::ostringstream why;
+  const double dlog_sigma = std::abs(std::log(ideal.sigma_ref / settings_.sigma_ref));
+  if (dlog_sigma > options_.sigma_ref_tolerance) {
+    why << "posterior sigma_if " << ideal.sigma_ref << " is far from the tables' " << settings_.sigma_ref;
+  } else if (settings_.lattice.dk_npm > options_.too_coarse * ideal.lattice.dk_npm ||
+             settings_.lattice.dk_npm < options_.too_fine * ideal.lattice.dk_npm ||
+             settings_.lattice.dkt_npm > options_.too_coarse * ideal.lattice.dkt_npm ||
+             settings_.lattice.dkt_npm < options_.too_fine * ideal.lattice.dkt_npm) {
+    why << "lattice spacing (" << settings_.lattice.dk_npm << ", " << settings_.lattice.dkt_npm << ") N/m; ideal ("
+        << ideal.lattice.dk_npm << ", " << ideal.lattice.dkt_npm << ")";
+  } else if (population_at_rebuild_) {
+    const auto& a = *population_at_rebuild_;
+    const auto& b = *ideal.population;
+    // The predictive has moved or widened beyond what the kept nodes were chosen for.
+    if (std::abs(b.k_mean_npm - a.k_mean_npm) > 0.5 * a.k_sd_npm ||
+        std::abs(b.kt_mean_npm - a.kt_mean_npm) > 0.5 * a.kt_sd_npm || b.k_sd_npm > 1.25 * a.k_sd_npm ||
+        b.kt_sd_npm > 1.25 * a.kt_sd_npm) {
+      why << "the fleet's predictive (k, k_t) moved from the one the tables kept their nodes for";
+    }
+  }
+  return why.str();
+}
+
+void MarginalTarget::begin_rebuild(const Eigen::ArrayXd& W, const smc::ParallelFor& parallel) {
+  if (mode_ != Mode::kIdle) throw std::logic_error("MarginalTarget::begin_rebuild: finish_stage() was not called");
+  const TableSettings ideal = ideal_settings(W);
+  const model::TruckTableOptions o = table_options(ideal);
+  const Eigen::Index n = trucks();
+  std::vector<model::TruckTable> tables(static_cast<std::size_t>(n));
+  parallel(n, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      tables[u] = model::build_truck_table(site_, speed_mps_[u], sprung_mass_kg_[u], observed_if_[u], ideal.lattice,
+                                           o, fits_[u]);
+    }
+  });
+  model::TableStore fresh;
+  std::size_t nodes = 0;
+  for (const auto& t : tables) nodes += t.nodes();
+  fresh.reserve(tables.size(), nodes);
+  for (const auto& t : tables) {
+    fresh.append(t);
+    passes_ += t.passes - t.fit.passes;
+  }
+  old_store_ = std::move(store_);
+  old_marginal_ = marginal_;
+  store_ = std::move(fresh);
+  settings_ = ideal;
+  marginal_ = model::FleetMarginal(site_.sensors(), lateral_, settings_.lattice);
+  trucks_at_last_rebuild_ = n;
+  population_at_rebuild_ = ideal.population;
+  ++rebuilds_;
+  mode_ = Mode::kCorrection;
+}
+
+void MarginalTarget::finish_stage() {
+  base_sum_ += inc_;
+  inc_.setZero();
+  mode_ = Mode::kIdle;
+  old_store_.reset();
+  old_marginal_.reset();
+}
+
+void MarginalTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
+                                 const smc::ParallelFor& parallel) {
+  const std::size_t n = store_.trucks();
+  parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index p = begin; p < end; ++p) {
+      const HyperVector th = theta_of(p);
+      const double lp = options_.prior.log_prior(th) + log_jacobian(th);
+      switch (mode_) {
+        case Mode::kIdle:
+          inc_[p] = 0.0;
+          break;
+        case Mode::kTruck:
+          inc_[p] = marginal_.log_likelihood(store_.view(n - 1), marginal_.prepare(th));
+          break;
+        case Mode::kCorrection:
+          inc_[p] = sum_loglik(store_, marginal_, n, th) - base_sum_[p];
+          break;
+      }
+      log_base[p] = lp + base_sum_[p];
+      loglik[p] = inc_[p];
+    }
+  });
+}
+
+void MarginalTarget::get_block(int /*block*/, Eigen::Ref<Eigen::MatrixXd> values) const {
+  for (int j = 0; j < kHyperCount; ++j) {
+    if (kLogScale[j])
+      values.row(j) = theta_.row(j).array().log().matrix();
+    else
+      values.row(j) = theta_.row(j);
+  }
+}
+
+void MarginalTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen::MatrixXd>& proposed,
+                                    Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
+                                    const smc::ParallelFor& parallel) {
+  const std::size_t n = store_.trucks();
+  parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index p = begin; p < end; ++p) {
+      const HyperVector th = from_move_coordinates(proposed, p);
+      double lp = options_.prior.log_prior(th);
+      if (lp > kNegInf) lp += log_jacobian(th);
+      double base = kNegInf, inc = 0.0;
+      if (lp > kNegInf) {
+        switch (mode_) {
+          case Mode::kIdle:
+            base = sum_loglik(store_, marginal_, n, th);
+            break;
+          case Mode::kTruck: {
+            base = sum_loglik(store_, marginal_, n - 1, th);
+            inc = marginal_.log_likelihood(store_.view(n - 1), marginal_.prepare(th));
+            break;
+          }
+          case Mode::kCorrection: {
+            base = sum_loglik(*old_store_, *old_marginal_, n, th);
+            inc = sum_loglik(store_, marginal_, n, th) - base;
+            break;
+          }
+        }
+      }
+      if (!(base > kNegInf) || std::isnan(inc)) {
+        base = kNegInf;
+        inc = 0.0;
+      }
+      proposed_base_sum_[p] = base;
+      proposed_inc_[p] = inc;
+      log_base[p] = base == kNegInf ? kNegInf : lp + base;
+      loglik[p] = inc;
+    }
+  });
+}
+
+void MarginalTarget::accept(int /*block*/, const std::vector<char>& accepted,
+                            const Eigen::Ref<const Eigen::MatrixXd>& proposed) {
+  for (Eigen::Index p = 0; p < options_.particles; ++p) {
+    if (!accepted[static_cast<std::size_t>(p)]) continue;
+    const HyperVector th = from_move_coordinates(proposed, p);
+    for (int j = 0; j < kHyperCount; ++j) theta_(j, p) = th[static_cast<std::size_t>(j)];
+    base_sum_[p] = proposed_base_sum_[p];
+    inc_[p] = proposed_inc_[p];
+  }
+}
+
+void MarginalTarget::resample(const std::vector<Eigen::Index>& ancestors) {
+  const Eigen::MatrixXd theta = theta_;
+  const Eigen::ArrayXd base = base_sum_, inc = inc_;
+  for (Eigen::Index p = 0; p < options_.particles; ++p) {
+    const Eigen::Index a = ancestors[static_cast<std::size_t>(p)];
+    theta_.col(p) = theta.col(a);
+    base_sum_[p] = base[a];
+    inc_[p] = inc[a];
+  }
+}
+
+namespace {
+constexpr std::uint64_t kMagic = 0x4e52414d46525353ULL;  // "SSRFMARN"
+constexpr std::uint32_t kVersion = 1;
+
+template <class T>
+void write_vector(io::BinaryWriter& out, const std::vector<T>& v) {
+  out.value<std::uint64_t>(v.size());
+  for (const T& x : v) out.value(x);
+}
+template <class T>
+void read_vector(io::BinaryReader& in, std::vector<T>& v, const char* what, std::uint64_t limit) {
+  const auto n = in.value<std::uint64_t>(what);
+  if (n > limit) in.fail(what, "implausible length " + std::to_string(n));
+  v.resize(static_cast<std::size_t>(n));
+  for (auto& x : v) x = in.value<T>(what);
+}
+}  // namespace
+
+void MarginalTarget::save(io::BinaryWriter& out) const {
+  if (mode_ != Mode::kIdle) throw std::logic_error("MarginalTarget::save: mid-stage");
+  out.value(kMagic);
+  out.value(kVersion);
+  out.value(settings_.lattice);
+  out.value(settings_.sigma_ref);
+  out.value<std::uint8_t>(settings_.population ? 1 : 0);
+  if (settings_.population) out.value(*settings_.population);
+  out.value<std::uint8_t>(population_at_rebuild_ ? 1 : 0);
+  if (population_at_rebuild_) out.value(*population_at_rebuild_);
+  out.value<std::int64_t>(trucks_at_last_rebuild_);
+  out.value<std::int32_t>(rebuilds_);
+  out.value<std::int64_t>(passes_);
+  out.matrix(theta_);
+  out.matrix(base_sum_.matrix());
+  write_vector(out, speed_mps_);
+  write_vector(out, sprung_mass_kg_);
+  for (const auto& y : observed_if_) out.matrix(y);
+  write_vector(out, fits_);
+  const auto& c = store_.columns();
+  write_vector(out, c.k_index);
+  write_vector(out, c.kt_index);
+  write_vector(out, c.c);
+  write_vector(out, c.m);
+  write_vector(out, c.b);
+  write_vector(out, c.z_mean_m);
+  write_vector(out, c.z_var_m2);
+  write_vector(out, c.offset);
+  write_vector(out, c.count);
+  write_vector(out, c.u_ref);
+}
+
+void MarginalTarget::load(io::BinaryReader& in) {
+  if (in.value<std::uint64_t>("marginal target") != kMagic) in.fail("marginal target", "not a marginal-core state");
+  const auto version = in.value<std::uint32_t>("marginal target version");
+  if (version != kVersion) {
+    in.fail("marginal target version", "format version " + std::to_string(version) + ", this build reads " +
+                                           std::to_string(kVersion));
+  }
+  constexpr std::uint64_t kMaxTrucks = 100'000'000, kMaxNodes = 4'000'000'000ULL;
+  settings_.lattice = in.value<model::Lattice>("lattice");
+  settings_.sigma_ref = in.value<double>("sigma_ref");
+  settings_.population.reset();
+  if (in.value<std::uint8_t>("population")) settings_.population = in.value<model::TruckTableOptions::Population>("population");
+  population_at_rebuild_.reset();
+  if (in.value<std::uint8_t>("population at rebuild"))
+    population_at_rebuild_ = in.value<model::TruckTableOptions::Population>("population at rebuild");
+  trucks_at_last_rebuild_ = in.value<std::int64_t>("trucks at last rebuild");
+  rebuilds_ = in.value<std::int32_t>("rebuilds");
+  passes_ = in.value<std::int64_t>("passes");
+  theta_ = in.matrix("theta", kHyperCount, options_.particles);
+  base_sum_ = in.matrix("log-likelihood sums", options_.particles, 1).array();
+  inc_ = Eigen::ArrayXd::Zero(options_.particles);
+  read_vector(in, speed_mps_, "speeds", kMaxTrucks);
+  read_vector(in, sprung_mass_kg_, "masses", kMaxTrucks);
+  if (sprung_mass_kg_.size() != speed_mps_.size()) in.fail("masses", "count differs from the speeds'");
+  observed_if_.clear();
+  for (std::size_t i = 0; i < speed_mps_.size(); ++i) observed_if_.push_back(in.matrix("impact factors", site_.sensors(), 1));
+  read_vector(in, fits_, "fits", kMaxTrucks);
+  auto& c = store_.columns();
+  read_vector(in, c.k_index, "table k index", kMaxNodes);
+  read_vector(in, c.kt_index, "table kt index", kMaxNodes);
+  read_vector(in, c.c, "table c", kMaxNodes);
+  read_vector(in, c.m, "table m", kMaxNodes);
+  read_vector(in, c.b, "table b", kMaxNodes);
+  read_vector(in, c.z_mean_m, "table z mean", kMaxNodes);
+  read_vector(in, c.z_var_m2, "table z var", kMaxNodes);
+  read_vector(in, c.offset, "table offsets", kMaxTrucks);
+  read_vector(in, c.count, "table counts", kMaxTrucks);
+  read_vector(in, c.u_ref, "table u_ref", kMaxTrucks);
+  const std::size_t n = speed_mps_.size();
+  const std::size_t nodes = c.c.size();
+  bool ok = fits_.size() == n && c.offset.size() == n && c.count.size() == n && c.u_ref.size() == n &&
+            c.k_index.size() == nodes && c.kt_index.size() == nodes && c.m.size() == nodes && c.b.size() == nodes &&
+            c.z_mean_m.size() == nodes && c.z_var_m2.size() == nodes;
+  for (std::size_t i = 0; ok && i < n; ++i) ok = c.offset[i] + c.count[i] <= nodes;
+  if (!ok) in.fail("tables", "the table arrays disagree in length");
+  marginal_ = model::FleetMarginal(site_.sensors(), lateral_, settings_.lattice);
+  mode_ = Mode::kIdle;
+  old_store_.reset();
+  old_marginal_.reset();
+}
+
+}  // namespace ssrfleet::fleet

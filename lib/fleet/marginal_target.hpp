@@ -1,0 +1,153 @@
+// The fleet posterior on the hyperparameters alone, π_n(θ) ∝ p(θ) Π_i ℓ_i(θ) (DESIGN.md §4), as
+// a target for the generic tempered SMC engine. Each particle is one θ (7 numbers); the trucks'
+// latents are integrated out in their tables (model/truck_table.hpp), so a particle's state does
+// not grow with n and one θ move costs one pass over the tables, with no integrator call.
+//
+// A stage is one of three kinds, set by the driver before it runs the stage:
+//   truck       add_truck(): log γ = log p(θ) + Σ_{i<n} ℓ_i(θ), increment ℓ_n(θ) (IBIS);
+//   correction  begin_rebuild(): the tables are rebuilt on a lattice and σ_ref that follow the
+//               posterior, and the ratio of the new approximation to the old one is tempered in
+//               (log γ = log p(θ) + Σ ℓ_i^old, increment Σ ℓ_i^new - Σ ℓ_i^old);
+//   idle        after finish_stage(): every truck in log γ, no increment (rejuvenation moves).
+// Per particle the target caches Σ ℓ_i over the trucks in log γ and the increment, so the
+// engine's stage start costs O(1) per particle for a truck stage.
+//
+// The tables' settings follow the posterior (TableSettings): the lattice spacing is a fraction of
+// the narrowest integrand width in (k, k_t) that the posterior allows, σ_ref is the posterior mean
+// of σ_IF (the Laplace form in σ_IF is exact at σ_ref and accurate near it), and the population
+// that decides which nodes a table keeps is the posterior predictive of (k, k_t), widened. When
+// the posterior has moved away from the settings the tables were built with, rebuild_reason()
+// says why, and the driver runs a correction stage; rebuilds are spaced geometrically in n, so
+// their cost is O(1) per truck amortised.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fleet/fleet_model.hpp"
+#include "io/binary_io.hpp"
+#include "model/fleet_marginal.hpp"
+#include "model/table_store.hpp"
+#include "model/truck_table.hpp"
+#include "site/site.hpp"
+#include "smc/target.hpp"
+
+namespace ssrfleet::fleet {
+
+class MarginalTarget final : public smc::TemperedModel {
+ public:
+  struct Options {
+    Eigen::Index particles = 1024;
+    PriorBounds prior;
+    // keep_nats, the lateral window and the quadrature; sigma_ref and population are set here.
+    model::TruckTableOptions table;
+    // Node spacing as a fraction of the narrowest integrand width (the rectangle rule's error is
+    // about exp(-2π² / fraction²): 3e-11 at 0.9).
+    double lattice_fraction = 0.9;
+    // Which nodes a table keeps is judged against the posterior predictive of (k, k_t) with its sd
+    // multiplied by this (so the fleet may move a good way before dropped nodes matter).
+    double population_widening = 1.3;
+    // Rebuild when the posterior mean of σ_IF is this far from σ_ref in log (the Laplace form's
+    // error grows like the cube of the distance: ~1e-3 nats at 0.1, ~1e-4 at 0.05).
+    double sigma_ref_tolerance = 0.05;
+    // Rebuild when the ideal spacing has moved outside [spacing / too_coarse, spacing / too_fine].
+    double too_coarse = 1.25, too_fine = 0.6;
+    // Rebuilds at most at n >= rebuild_growth × (n at the last rebuild): O(1) cost per truck.
+    double rebuild_growth = 1.5;
+  };
+
+  struct TableSettings {
+    model::Lattice lattice;
+    double sigma_ref = 0.0;
+    std::optional<model::TruckTableOptions::Population> population;
+  };
+
+  MarginalTarget(const site::Site& site, Options options);
+
+  // θ of every particle from the prior (before the first truck).
+  void initialise(const smc::RngFactory& rngs);
+
+  // Builds the truck's table with the settings the current cloud implies (W: the engine's normalised
+  // weights) and makes its ℓ the next stage's increment. DataError-free: the record was checked.
+  void add_truck(double speed_mps, double sprung_mass_kg, const Eigen::VectorXd& impact_factors,
+                 const Eigen::ArrayXd& W, const smc::ParallelFor& parallel);
+
+  // Why the tables should be rebuilt now, or "" (see the header).
+  std::string rebuild_reason(const Eigen::ArrayXd& W) const;
+  // Rebuilds every table with the settings the cloud implies; the next stage is the correction.
+  void begin_rebuild(const Eigen::ArrayXd& W, const smc::ParallelFor& parallel);
+  // After every stage: folds the stage's increment into log γ (the target becomes idle).
+  void finish_stage();
+
+  Eigen::Index trucks() const { return static_cast<Eigen::Index>(speed_mps_.size()); }
+  const Eigen::MatrixXd& theta() const { return theta_; }  // 7 x P
+  const TableSettings& settings() const { return settings_; }
+  const model::TableStore& tables() const { return store_; }
+  const model::FleetMarginal& marginal() const { return marginal_; }
+  const std::vector<double>& speed_mps() const { return speed_mps_; }
+  const std::vector<double>& sprung_mass_kg() const { return sprung_mass_kg_; }
+  const std::vector<Eigen::VectorXd>& observed_if() const { return observed_if_; }
+  long long integrator_passes() const { return passes_; }
+  int rebuilds() const { return rebuilds_; }
+  // Σ_i ℓ_i(θ) + log p(θ) of particle p as cached (for tests: the density the moves target).
+  double cached_log_posterior(Eigen::Index p) const { return base_sum_[p] + inc_[p] + log_prior(p); }
+  // The same recomputed from the tables.
+  double log_posterior(const HyperVector& theta) const;
+
+  // Checkpoint: the particles, the data and the tables (so a resume does not rebuild them).
+  void save(io::BinaryWriter& out) const;
+  void load(io::BinaryReader& in);
+
+  // smc::TemperedModel
+  Eigen::Index particles() const override { return options_.particles; }
+  void log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
+                   const smc::ParallelFor& parallel) override;
+  std::vector<smc::BlockSpec> blocks() const override { return {{"theta", kHyperCount}}; }
+  void get_block(int block, Eigen::Ref<Eigen::MatrixXd> values) const override;
+  void log_density_at(int block, const Eigen::Ref<const Eigen::MatrixXd>& proposed,
+                      Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
+                      const smc::ParallelFor& parallel) override;
+  void accept(int block, const std::vector<char>& accepted, const Eigen::Ref<const Eigen::MatrixXd>& proposed) override;
+  void resample(const std::vector<Eigen::Index>& ancestors) override;
+
+ private:
+  enum class Mode { kIdle, kTruck, kCorrection };
+  HyperVector theta_of(Eigen::Index p) const;
+  double log_prior(Eigen::Index p) const { return options_.prior.log_prior(theta_of(p)); }
+  // Σ_i ℓ_i(θ) over trucks [0, end) of a store.
+  double sum_loglik(const model::TableStore& store, const model::FleetMarginal& marginal, std::size_t end,
+                    const HyperVector& theta) const;
+  // The settings the cloud implies.
+  TableSettings ideal_settings(const Eigen::ArrayXd& W) const;
+  model::TruckTableOptions table_options(const TableSettings& s) const;
+
+  const site::Site& site_;
+  Options options_;
+  fleet::LateralRange lateral_;
+  TableSettings settings_;
+  model::FleetMarginal marginal_;
+  model::TableStore store_;
+  // During a correction stage: the tables and settings being replaced.
+  std::optional<model::TableStore> old_store_;
+  std::optional<model::FleetMarginal> old_marginal_;
+  Mode mode_ = Mode::kIdle;
+
+  std::vector<double> speed_mps_, sprung_mass_kg_;
+  std::vector<Eigen::VectorXd> observed_if_;
+  std::vector<model::TruckFit> fits_;
+
+  Eigen::MatrixXd theta_;   // 7 x P
+  Eigen::ArrayXd base_sum_;  // Σ ℓ_i over the trucks in log γ
+  Eigen::ArrayXd inc_;       // the stage's increment at the current θ
+  Eigen::ArrayXd proposed_base_sum_, proposed_inc_;
+  long long passes_ = 0;
+  int rebuilds_ = 0;
+  Eigen::Index trucks_at_last_rebuild_ = 0;
+  // The predictive (k, k_t) at the last rebuild, for the drift rule.
+  std::optional<model::TruckTableOptions::Population> population_at_rebuild_;
+};
+
+}  // namespace ssrfleet::fleet

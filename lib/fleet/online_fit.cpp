@@ -1,0 +1,59 @@
+#include "fleet/online_fit.hpp"
+
+#include "util/errors.hpp"
+
+namespace ssrfleet::fleet {
+
+namespace {
+
+class MarginalFit final : public OnlineFit {
+ public:
+  MarginalFit(const site::Site& site, const MarginalSmc::Options& o) : smc_(site, o) {}
+  smc::StageSummary absorb(const io::WimRecord& record) override { return smc_.absorb(record); }
+  void rejuvenate(int sweeps) override { smc_.rejuvenate(sweeps); }
+  PosteriorCloud cloud() const override { return smc_.cloud(); }
+  long trucks_seen() const override { return smc_.trucks_seen(); }
+  const std::deque<std::string>& truck_ids() const override { return smc_.truck_ids(); }
+  const smc::TemperedSampler& sampler() const override { return smc_.sampler(); }
+  void save(io::BinaryWriter& out) const override { smc_.save(out); }
+  void restore(io::BinaryReader& in) override { smc_.restore(in); }
+  std::string core() const override { return "marginal"; }
+  std::string note() const override {
+    return smc_.last_rebuild().empty() ? "" : "tables rebuilt (" + smc_.last_rebuild() + ")";
+  }
+
+ private:
+  MarginalSmc smc_;
+};
+
+class LatentFit final : public OnlineFit {
+ public:
+  LatentFit(const site::Site& site, const FleetSmc::Options& o) : smc_(site, o) {}
+  smc::StageSummary absorb(const io::WimRecord& record) override { return smc_.absorb(record); }
+  void rejuvenate(int sweeps) override { smc_.rejuvenate(sweeps); }
+  PosteriorCloud cloud() const override { return smc_.cloud(); }
+  long trucks_seen() const override { return smc_.trucks_seen(); }
+  const std::deque<std::string>& truck_ids() const override { return smc_.truck_ids(); }
+  const smc::TemperedSampler& sampler() const override { return smc_.sampler(); }
+  void save(io::BinaryWriter& out) const override { smc_.save(out); }
+  void restore(io::BinaryReader& in) override { smc_.restore(in); }
+  std::string core() const override { return "latent"; }
+
+ private:
+  FleetSmc smc_;
+};
+
+}  // namespace
+
+std::unique_ptr<OnlineFit> make_online_fit(const site::Site& site, const OnlineFitOptions& options) {
+  if (options.core == OnlineFitOptions::Core::kMarginal) {
+    std::string why;
+    if (!options.marginal.sampler.IsValid(&why)) throw UsageError(why);
+    return std::make_unique<MarginalFit>(site, options.marginal);
+  }
+  std::string why;
+  if (!options.latent.sampler.IsValid(&why)) throw UsageError(why);
+  return std::make_unique<LatentFit>(site, options.latent);
+}
+
+}  // namespace ssrfleet::fleet

@@ -1,0 +1,55 @@
+// One driver shape for every command that feeds trucks to a sampler (fit, stream, reproduce):
+// absorb a record, rejuvenate after an offline replay, hand out the posterior, checkpoint. Two
+// cores implement it:
+//   marginal (default)  MarginalSmc: IBIS over θ with each truck's latents integrated out in a
+//                       table; cost per truck flat in n (DESIGN.md §4);
+//   latent              FleetSmc: every truck's latents in every particle, older trucks re-swept
+//                       per truck (cost grows with n); needed for model extensions and for the
+//                       bounded-memory window mode.
+#pragma once
+
+#include <deque>
+#include <memory>
+#include <string>
+
+#include "fleet/fleet_smc.hpp"
+#include "fleet/marginal_smc.hpp"
+#include "fleet/posterior_cloud.hpp"
+#include "io/binary_io.hpp"
+#include "io/wim_log.hpp"
+#include "site/site.hpp"
+#include "smc/engine.hpp"
+
+namespace ssrfleet::fleet {
+
+class OnlineFit {
+ public:
+  virtual ~OnlineFit() = default;
+  virtual smc::StageSummary absorb(const io::WimRecord& record) = 0;
+  // MCMC sweeps at φ = 1 after the last record of an offline replay (the posterior is unchanged).
+  virtual void rejuvenate(int sweeps) = 0;
+  virtual PosteriorCloud cloud() const = 0;
+  virtual long trucks_seen() const = 0;
+  virtual const std::deque<std::string>& truck_ids() const = 0;
+  virtual const smc::TemperedSampler& sampler() const = 0;
+  virtual void save(io::BinaryWriter& out) const = 0;
+  virtual void restore(io::BinaryReader& in) = 0;
+  virtual std::string core() const = 0;  // "marginal" or "latent"
+  // A line for progress output after absorb(): what the last record cost beyond its stage.
+  virtual std::string note() const { return ""; }
+};
+
+struct OnlineFitOptions {
+  enum class Core { kMarginal, kLatent };
+  Core core = Core::kMarginal;
+  MarginalSmc::Options marginal;
+  FleetSmc::Options latent;
+  // The sampler options shared by both (particles, threads, seed): copied into the chosen core's.
+  smc::TemperedSampler::Options& sampler() { return core == Core::kMarginal ? marginal.sampler : latent.sampler; }
+  int default_final_sweeps() const { return core == Core::kMarginal ? marginal.final_sweeps : latent.final_sweeps; }
+};
+
+// UsageError if the options are invalid.
+std::unique_ptr<OnlineFit> make_online_fit(const site::Site& site, const OnlineFitOptions& options);
+
+}  // namespace ssrfleet::fleet

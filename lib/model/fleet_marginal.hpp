@@ -1,0 +1,60 @@
+// The fleet model's per-truck marginal likelihood (DESIGN.md §4):
+//   ℓ_i(θ) = ∫∫∫ p(y_i | k, k_t, z, σ_IF) N(k | K, σ_k²) N(k_t | K_t, σ_kt²) N_road(z | Z, σ_z²) dk dk_t dz,
+// the truck's latents integrated out, so the fleet posterior after n trucks is
+// π_n(θ) ∝ p(θ) Π_i ℓ_i(θ) on the 7 hyperparameters alone. The z integral is done when the
+// truck's table is built (truck_table.hpp); (k, k_t) by the rectangle rule on the shared lattice.
+// With u = 1/σ_IF² and V_i = σ_z² + s²_i(u):
+//   ℓ_i(θ) = (M/2) log(u / 2π) - log P_road(Z, σ_z) + log(Δk Δk_t) - log(2π σ_k σ_kt) - ½ log(2π V_i)
+//            + log Σ_g exp( c_g - m_g u/2 - b_g log u - ½ a_g² - ½ β_g² - (ẑ_g - Z)² / (2 V_i) ),
+//   a_g = (k_g - K)/σ_k, β_g = (kt_g - K_t)/σ_kt.
+// a_g and β_g are linear in the node's lattice index, so the node sum reads only the table.
+// Everything that depends on θ alone (not on the truck) is computed once per θ (ThetaTerms).
+//
+// The rectangle rule's error is about exp(-2π² (w / Δ)²) for an integrand of width w on spacing Δ:
+// negligible once w ≥ Δ, but a population sd far below Δ would make the node sum jump as K moves
+// between nodes (a rough likelihood no MCMC can cross) and overstate it by Δ / σ when K sits on a
+// node. So σ_k and σ_kt below kMinSdPerSpacing node spacings are evaluated at that floor (error
+// ~3e-6 there). The lattice follows the posterior (MarginalTarget), so the floor only ever touches
+// particles in the far lower tail of σ_k or σ_kt.
+#pragma once
+
+#include "fleet/fleet_model.hpp"
+#include "model/table_store.hpp"
+#include "model/truck_table.hpp"
+
+namespace ssrfleet::model {
+
+// What ℓ_i(θ) needs of θ, computed once for all trucks.
+struct ThetaTerms {
+  double a0 = 0.0, da = 0.0;   // a_g = a0 + i da
+  double b0 = 0.0, db = 0.0;   // β_g = b0 + j db
+  double lateral_mean_m = 0.0;
+  double lateral_var_m2 = 0.0;
+  double u = 0.0, half_u = 0.0, log_u = 0.0;
+  double constant = 0.0;       // the truck-independent part of ℓ_i
+  bool inside = false;         // θ in the support (σ's positive, road mass positive)
+};
+
+class FleetMarginal {
+ public:
+  static constexpr double kMinSdPerSpacing = 0.8;
+
+  FleetMarginal(int sensors, fleet::LateralRange range, Lattice lattice);
+
+  const Lattice& lattice() const { return lattice_; }
+  int sensors() const { return sensors_; }
+
+  ThetaTerms prepare(const fleet::HyperVector& theta) const;
+  // ℓ_i(θ); -inf when θ is outside the support.
+  double log_likelihood(const TableView& table, const ThetaTerms& terms) const;
+  double log_likelihood(const TruckTable& table, const ThetaTerms& terms) const {
+    return log_likelihood(view_of(table), terms);
+  }
+
+ private:
+  int sensors_;
+  fleet::LateralRange range_;
+  Lattice lattice_;
+};
+
+}  // namespace ssrfleet::model

@@ -1,0 +1,515 @@
+#include "model/truck_table.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <sstream>
+#include <utility>
+
+#include <Eigen/Dense>
+
+#include "util/errors.hpp"
+#include "util/gauss_legendre.hpp"
+
+namespace ssrfleet::model {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Impact factors (sensors x passes) of the trucks at the given (k, k_t, z): batched calls on
+// chunks of the passes (each pass is independent, so the chunking changes no bit).
+Eigen::ArrayXXd simulate(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                         const std::vector<double>& k, const std::vector<double>& kt, const std::vector<double>& z,
+                         const util::ParallelRange& parallel = util::serial_range) {
+  const auto n = static_cast<Eigen::Index>(k.size());
+  Eigen::ArrayXXd out(site.sensors(), n);
+  // Chunks of whole integrator blocks; a small batch stays in one call.
+  constexpr Eigen::Index kChunk = 4 * vehicle::batch_block_trucks;
+  const Eigen::Index chunks = (n + kChunk - 1) / kChunk;
+  parallel(chunks, [&](Eigen::Index cb, Eigen::Index ce) {
+    const Eigen::Index begin = cb * kChunk, end = std::min(n, ce * kChunk);
+    site::TruckBatch batch;
+    batch.resize(end - begin);
+    batch.speed_mps.setConstant(speed_mps);
+    batch.sprung_mass_kg.setConstant(sprung_mass_kg);
+    for (Eigen::Index i = begin; i < end; ++i) {
+      batch.stiffness_npm[i - begin] = k[static_cast<std::size_t>(i)];
+      batch.tyre_stiffness_npm[i - begin] = kt[static_cast<std::size_t>(i)];
+      batch.lateral_m[i - begin] = z[static_cast<std::size_t>(i)];
+    }
+    if (end > begin) site.impact_factors(batch, out.middleCols(begin, end - begin));
+  });
+  return out;
+}
+
+void check_inputs(const site::Site& site, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  if (y.size() != site.sensors()) {
+    throw UsageError("truck table: the record has " + std::to_string(y.size()) + " impact factors but the site has " +
+                     std::to_string(site.sensors()) + " sensors");
+  }
+}
+
+// Sum of squared residuals of every column of `ifs` against y.
+Eigen::ArrayXd column_ssr(const Eigen::ArrayXXd& ifs, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  return (ifs.colwise() - y.array()).square().colwise().sum().transpose();
+}
+
+// The best (k, k_t) fit at fixed z by Gauss–Newton with Levenberg damping in (log k, log k_t, z).
+struct Point {
+  double log_k, log_kt, z;
+};
+
+struct Fitter {
+  const site::Site& site;
+  double speed, mass;
+  const Eigen::Ref<const Eigen::VectorXd>& y;
+  int passes = 0;
+
+  // Residuals at p and the Jacobian of the impact factors by forward differences.
+  void residual_and_jacobian(const Point& p, Eigen::VectorXd& r, Eigen::MatrixXd& J) {
+    const double h_log = 1e-4, h_z = 2e-3;
+    const double lo = site.lateral_min_m(), hi = site.lateral_max_m();
+    // Step z inwards at the road's edge so every evaluation stays on the surface.
+    const double dz = (p.z + h_z <= hi) ? h_z : -h_z;
+    std::vector<double> k{std::exp(p.log_k), std::exp(p.log_k + h_log), std::exp(p.log_k), std::exp(p.log_k)};
+    std::vector<double> kt{std::exp(p.log_kt), std::exp(p.log_kt), std::exp(p.log_kt + h_log), std::exp(p.log_kt)};
+    std::vector<double> z{p.z, p.z, p.z, std::clamp(p.z + dz, lo, hi)};
+    const Eigen::ArrayXXd f = simulate(site, speed, mass, k, kt, z);
+    passes += 4;
+    r = y - f.col(0).matrix();
+    J.resize(y.size(), 3);
+    J.col(0) = ((f.col(1) - f.col(0)) / h_log).matrix();
+    J.col(1) = ((f.col(2) - f.col(0)) / h_log).matrix();
+    J.col(2) = ((f.col(3) - f.col(0)) / dz).matrix();
+  }
+
+  double ssr_at(const Point& p) {
+    const Eigen::ArrayXXd f = simulate(site, speed, mass, {std::exp(p.log_k)}, {std::exp(p.log_kt)}, {p.z});
+    passes += 1;
+    return (f.col(0).matrix() - y).squaredNorm();
+  }
+
+  // Levenberg–Marquardt from p; returns the local optimum and its SSR.
+  std::pair<Point, double> optimise(Point p, double ssr) {
+    return optimise(p, ssr, site.lateral_min_m(), site.lateral_max_m());
+  }
+  // The same with z kept in [lo, hi] (one lateral mode of several).
+  std::pair<Point, double> optimise(Point p, double ssr, double lo, double hi) {
+    double lambda = 1e-3;
+    Eigen::VectorXd r;
+    Eigen::MatrixXd J;
+    for (int iter = 0; iter < 40; ++iter) {
+      residual_and_jacobian(p, r, J);
+      const Eigen::Matrix3d JtJ = J.transpose() * J;
+      const Eigen::Vector3d g = J.transpose() * r;
+      bool improved = false;
+      for (int tries = 0; tries < 8 && !improved; ++tries) {
+        Eigen::Matrix3d A = JtJ;
+        A.diagonal() += lambda * JtJ.diagonal().cwiseMax(1e-12);
+        const Eigen::Vector3d step = A.ldlt().solve(g);
+        Point q{p.log_k + std::clamp(step[0], -0.5, 0.5), p.log_kt + std::clamp(step[1], -0.5, 0.5),
+                std::clamp(p.z + std::clamp(step[2], -0.1, 0.1), lo, hi)};
+        const double s = ssr_at(q);
+        if (s < ssr) {
+          const double gain = ssr - s;
+          p = q;
+          ssr = s;
+          lambda = std::max(lambda * 0.3, 1e-9);
+          improved = true;
+          if (gain < 1e-12 * std::max(ssr, 1e-30)) return {p, ssr};
+        } else {
+          lambda *= 10.0;
+        }
+      }
+      if (!improved) break;
+    }
+    return {p, ssr};
+  }
+
+  // SSR at every lateral line at fixed (k, k_t); returns the best line's position and SSR.
+  std::pair<double, double> scan_lines(const std::vector<double>& ks, const std::vector<double>& kts,
+                                       double* best_k, double* best_kt) {
+    const road::Surface& s = site.surface();
+    std::vector<double> k, kt, z;
+    for (std::size_t a = 0; a < ks.size(); ++a) {
+      for (Eigen::Index j = 0; j < s.lines(); ++j) {
+        k.push_back(ks[a]);
+        kt.push_back(kts[a]);
+        z.push_back(s.lateral_m(j));
+      }
+    }
+    const Eigen::ArrayXd ssr = column_ssr(simulate(site, speed, mass, k, kt, z), y);
+    passes += static_cast<int>(k.size());
+    Eigen::Index best = 0;
+    const double best_ssr = ssr.minCoeff(&best);
+    *best_k = k[static_cast<std::size_t>(best)];
+    *best_kt = kt[static_cast<std::size_t>(best)];
+    return {z[static_cast<std::size_t>(best)], best_ssr};
+  }
+};
+
+// What one node contributes: the Laplace-form coefficients and its z-posterior moments at u_ref.
+struct NodeResult {
+  double log_i_ref = -kInf;
+  double c = 0.0, m = 0.0, b = 0.0;
+  double z_mean = 0.0, z_var = 0.0;
+};
+
+// The z-integral of exp(-u SSR(z) / 2) over the lines [first, last] of one node's passes, by
+// Gauss–Legendre on each segment. SSR is exactly quadratic on a segment: |e_a - w d|².
+NodeResult integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& ifs_by_line, Eigen::Index first_line,
+                          const road::Surface& surface, const Eigen::Ref<const Eigen::VectorXd>& y, double u_ref,
+                          const util::QuadratureRule& rule) {
+  const Eigen::Index lines = ifs_by_line.cols();
+  const double dy = surface.dy_m;
+  const std::size_t q = rule.nodes.size();
+  std::vector<double> zs, ss, ws;
+  zs.reserve(static_cast<std::size_t>(lines) * q);
+  ss.reserve(zs.capacity());
+  ws.reserve(zs.capacity());
+  for (Eigen::Index j = 0; j + 1 < lines; ++j) {
+    const Eigen::VectorXd ea = y - ifs_by_line.col(j).matrix();
+    const Eigen::VectorXd d = (ifs_by_line.col(j + 1) - ifs_by_line.col(j)).matrix();
+    const double aa = ea.squaredNorm(), ad = ea.dot(d), dd = d.squaredNorm();
+    const double z0 = surface.lateral_m(first_line + j);
+    for (std::size_t p = 0; p < q; ++p) {
+      const double w = rule.nodes[p];
+      zs.push_back(z0 + w * dy);
+      ss.push_back(std::max(0.0, aa - 2.0 * w * ad + w * w * dd));
+      ws.push_back(rule.weights[p] * dy);
+    }
+  }
+  NodeResult r;
+  if (zs.empty()) return r;
+  const double smin = *std::min_element(ss.begin(), ss.end());
+  double sum = 0.0, s1 = 0.0, s2 = 0.0, z1 = 0.0, z2 = 0.0;
+  for (std::size_t i = 0; i < zs.size(); ++i) {
+    const double ds = ss[i] - smin;
+    const double p = ws[i] * std::exp(-0.5 * u_ref * ds);
+    sum += p;
+    s1 += p * ds;
+    s2 += p * ds * ds;
+    z1 += p * zs[i];
+    z2 += p * zs[i] * zs[i];
+  }
+  const double mean_ds = s1 / sum;
+  const double var_s = std::max(0.0, s2 / sum - mean_ds * mean_ds);
+  r.log_i_ref = std::log(sum) - 0.5 * u_ref * smin;
+  // Match value, slope and curvature of log I(u) at u_ref (see the header):
+  // d/du log I = -E[SSR]/2, d²/du² log I = Var[SSR]/4.
+  r.b = 0.25 * var_s * u_ref * u_ref;
+  r.m = (smin + mean_ds) - 2.0 * r.b / u_ref;
+  r.c = r.log_i_ref + 0.5 * r.m * u_ref + r.b * std::log(u_ref);
+  r.z_mean = z1 / sum;
+  r.z_var = std::max(0.0, z2 / sum - r.z_mean * r.z_mean);
+  return r;
+}
+
+}  // namespace
+
+std::size_t TruckTable::bytes() const {
+  return sizeof(TruckTable) + k_index.capacity() * sizeof(std::int32_t) * 2 +
+         (c.capacity() + m.capacity() + b.capacity() + z_mean_m.capacity() + z_var_m2.capacity()) * sizeof(float);
+}
+
+TruckFit fit_truck(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                   const Eigen::Ref<const Eigen::VectorXd>& impact_factors, const TruckTableOptions& options) {
+  check_inputs(site, impact_factors);
+  Fitter fitter{site, speed_mps, sprung_mass_kg, impact_factors};
+  // Coarse start: every lateral line at a 3 x 3 spread of (k, k_t) around the hint. The
+  // z-likelihood is multimodal across the road; the stiffnesses only shift its modes a little.
+  std::vector<double> ks, kts;
+  if (options.start_is_close) {
+    ks.push_back(options.k_start_npm);
+    kts.push_back(options.kt_start_npm);
+  } else {
+    for (double fk : {0.6, 1.0, 1.6}) {
+      for (double fkt : {0.7, 1.0, 1.4}) {
+        ks.push_back(options.k_start_npm * fk);
+        kts.push_back(options.kt_start_npm * fkt);
+      }
+    }
+  }
+  double k0 = 0.0, kt0 = 0.0;
+  auto [z0, ssr0] = fitter.scan_lines(ks, kts, &k0, &kt0);
+  auto [best, best_ssr] = fitter.optimise({std::log(k0), std::log(kt0), z0}, ssr0);
+  // At the fitted stiffnesses a different lateral mode may win: rescan once and refit from it.
+  double kr = 0.0, ktr = 0.0;
+  auto [zr, ssr_r] = fitter.scan_lines({std::exp(best.log_k)}, {std::exp(best.log_kt)}, &kr, &ktr);
+  if (ssr_r < best_ssr && std::abs(zr - best.z) > site.surface().dy_m) {
+    auto [p2, s2] = fitter.optimise({best.log_k, best.log_kt, zr}, ssr_r);
+    if (s2 < best_ssr) {
+      best = p2;
+      best_ssr = s2;
+    }
+  }
+
+  TruckFit fit;
+  fit.stiffness_npm = std::exp(best.log_k);
+  fit.tyre_stiffness_npm = std::exp(best.log_kt);
+  fit.lateral_m = best.z;
+  fit.ssr = best_ssr;
+  const int M = static_cast<int>(impact_factors.size());
+  fit.sigma_hat = std::sqrt(best_ssr / std::max(1, M - 3));
+  // Curvature: the likelihood covariance of (k, k_t, z) at σ is σ² (JᵀJ)⁻¹, J in natural units.
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J;
+  fitter.residual_and_jacobian(best, r, J);
+  J.col(0) /= fit.stiffness_npm;
+  J.col(1) /= fit.tyre_stiffness_npm;
+  const Eigen::Matrix3d JtJ = J.transpose() * J;
+  Eigen::Matrix3d cov = JtJ.ldlt().solve(Eigen::Matrix3d::Identity());
+  if (!cov.allFinite() || cov(0, 0) <= 0.0 || cov(1, 1) <= 0.0) {
+    // A degenerate fit (k or k_t has no effect on these sensors): a generic 20 % spread.
+    cov.setZero();
+    cov(0, 0) = std::pow(0.2 * fit.stiffness_npm / 0.02, 2);
+    cov(1, 1) = std::pow(0.2 * fit.tyre_stiffness_npm / 0.02, 2);
+  }
+  fit.stiffness_sd_per_sigma = std::sqrt(cov(0, 0));
+  fit.tyre_stiffness_sd_per_sigma = std::sqrt(cov(1, 1));
+  fit.stiffness_correlation = cov(0, 1) / std::sqrt(cov(0, 0) * cov(1, 1));
+  fit.passes = fitter.passes;
+  return fit;
+}
+
+TruckTable build_truck_table(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                             const Eigen::Ref<const Eigen::VectorXd>& impact_factors, const Lattice& lattice,
+                             const TruckTableOptions& options) {
+  const TruckFit fit = fit_truck(site, speed_mps, sprung_mass_kg, impact_factors, options);
+  return build_truck_table(site, speed_mps, sprung_mass_kg, impact_factors, lattice, options, fit);
+}
+
+TruckTable build_truck_table(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                             const Eigen::Ref<const Eigen::VectorXd>& impact_factors, const Lattice& lattice,
+                             const TruckTableOptions& options, const TruckFit& fit) {
+  return build_truck_table(site, speed_mps, sprung_mass_kg, impact_factors, lattice, options, fit, util::serial_range);
+}
+
+TruckTable build_truck_table(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                             const Eigen::Ref<const Eigen::VectorXd>& impact_factors, const Lattice& lattice,
+                             const TruckTableOptions& options, const TruckFit& fit,
+                             const util::ParallelRange& parallel) {
+  check_inputs(site, impact_factors);
+  if (!lattice.valid()) throw UsageError("truck table: the (k, k_t) lattice has a non-positive spacing");
+  if (!(options.sigma_ref > 0.0)) throw UsageError("truck table: sigma_ref must be positive");
+  const road::Surface& surface = site.surface();
+  const double u_ref = 1.0 / (options.sigma_ref * options.sigma_ref);
+  const util::QuadratureRule rule = util::gauss_legendre01(options.points_per_segment);
+
+  // Lateral modes: scan the fit's (k, k_t) over every line of the road and keep the segments whose
+  // least SSR is within keep_nats (at u_ref) of the best. Runs of such segments closer than
+  // 2 z_margin_lines are one mode; each mode is tabulated on its own lines (widened by
+  // z_margin_lines each side), so a truck whose z-likelihood has two modes across the road keeps
+  // both (the z-integral splits over disjoint ranges: the node sum adds them exactly).
+  const Eigen::Index L = surface.lines();
+  int table_passes_extra = 0;
+  std::vector<double> seg_min;
+  {
+    std::vector<double> k(static_cast<std::size_t>(L), fit.stiffness_npm), kt(static_cast<std::size_t>(L), fit.tyre_stiffness_npm), z;
+    for (Eigen::Index l = 0; l < L; ++l) z.push_back(surface.lateral_m(l));
+    const Eigen::ArrayXXd ifs = simulate(site, speed_mps, sprung_mass_kg, k, kt, z, parallel);
+    for (Eigen::Index j = 0; j + 1 < L; ++j) {
+      const Eigen::VectorXd ea = impact_factors - ifs.col(j).matrix();
+      const Eigen::VectorXd d = (ifs.col(j + 1) - ifs.col(j)).matrix();
+      const double aa = ea.squaredNorm(), ad = ea.dot(d), dd = d.squaredNorm();
+      const double w = dd > 0.0 ? std::clamp(ad / dd, 0.0, 1.0) : 0.0;
+      seg_min.push_back(std::max(0.0, aa - 2.0 * w * ad + w * w * dd));
+    }
+  }
+  struct Mode {
+    Eigen::Index first_line, last_line;
+    double k_npm, kt_npm;
+  };
+  std::vector<Mode> modes;
+  {
+    const double best = seg_min.empty() ? 0.0 : *std::min_element(seg_min.begin(), seg_min.end());
+    const double limit = best + 2.0 * options.keep_nats / u_ref;
+    std::vector<std::pair<Eigen::Index, Eigen::Index>> runs;  // segment ranges [a, b]
+    for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(seg_min.size()); ++j) {
+      if (seg_min[static_cast<std::size_t>(j)] > limit) continue;
+      if (!runs.empty() && j - runs.back().second <= 2 * options.z_margin_lines + 1)
+        runs.back().second = j;
+      else
+        runs.emplace_back(j, j);
+    }
+    const double fit_line = (fit.lateral_m - surface.y0_m) / surface.dy_m;
+    Fitter fitter{site, speed_mps, sprung_mass_kg, impact_factors};
+    for (const auto& [a, b] : runs) {
+      Mode m{std::max<Eigen::Index>(0, a - options.z_margin_lines), std::min<Eigen::Index>(L - 1, b + 1 + options.z_margin_lines),
+             fit.stiffness_npm, fit.tyre_stiffness_npm};
+      if (fit_line < static_cast<double>(a) - 1.0 || fit_line > static_cast<double>(b) + 2.0) {
+        // Another mode than the fit's: its own best (k, k_t), with z kept inside it.
+        Eigen::Index jbest = a;
+        for (Eigen::Index j = a; j <= b; ++j)
+          if (seg_min[static_cast<std::size_t>(j)] < seg_min[static_cast<std::size_t>(jbest)]) jbest = j;
+        const double z0 = surface.lateral_m(jbest) + 0.5 * surface.dy_m;
+        const double lo = surface.lateral_m(a), hi = surface.lateral_m(b + 1);
+        const Point p0{std::log(fit.stiffness_npm), std::log(fit.tyre_stiffness_npm), z0};
+        const auto [p, ssr] = fitter.optimise(p0, fitter.ssr_at(p0), lo, hi);
+        (void)ssr;
+        m.k_npm = std::exp(p.log_k);
+        m.kt_npm = std::exp(p.log_kt);
+      }
+      modes.push_back(m);
+    }
+    if (modes.empty()) modes.push_back({0, L - 1, fit.stiffness_npm, fit.tyre_stiffness_npm});
+    table_passes_extra = fitter.passes + static_cast<int>(L);
+  }
+
+  // Per mode: start with the nodes inside the likelihood ellipse of radius sqrt(2 keep) at σ_ref
+  // (times the population's Gaussian if given), then grow by neighbours while a node above the
+  // threshold has an unevaluated neighbour (the likelihood is not exactly elliptic in (k, k_t)).
+  const double sk = fit.stiffness_sd_per_sigma * options.sigma_ref;
+  const double skt = fit.tyre_stiffness_sd_per_sigma * options.sigma_ref;
+  const double rho = std::clamp(fit.stiffness_correlation, -0.999, 0.999);
+  Eigen::Matrix2d likelihood_cov;
+  likelihood_cov << sk * sk, rho * sk * skt, rho * sk * skt, skt * skt;
+  const auto& pop = options.population;
+  auto population_log_density = [&](double k, double kt) {
+    if (!pop) return 0.0;
+    const double a = (k - pop->k_mean_npm) / pop->k_sd_npm, b = (kt - pop->kt_mean_npm) / pop->kt_sd_npm;
+    return -0.5 * (a * a + b * b);
+  };
+  auto admissible = [&](int i, int j) { return lattice.k_at(i) > 0.0 && lattice.kt_at(j) > 0.0; };
+  auto score = [&](const std::pair<int, int>& ij, const NodeResult& r) {
+    return r.log_i_ref + population_log_density(lattice.k_at(ij.first), lattice.kt_at(ij.second));
+  };
+  const double radius2 = 2.0 * options.keep_nats;
+
+  TruckTable table;
+  table.fit = fit;
+  table.passes = fit.passes + table_passes_extra;
+  double best_score = -kInf, best_log_i = -kInf;
+  std::vector<std::map<std::pair<int, int>, NodeResult>> evaluated_by_mode(modes.size());
+  for (std::size_t mi = 0; mi < modes.size(); ++mi) {
+    const Mode& mode = modes[mi];
+    const Eigen::Index first_line = mode.first_line, lines = mode.last_line - mode.first_line + 1;
+    Eigen::Matrix2d precision = likelihood_cov.inverse();
+    Eigen::Vector2d centre(mode.k_npm, mode.kt_npm);
+    if (pop) {
+      Eigen::Matrix2d pop_precision = Eigen::Vector2d(1.0 / (pop->k_sd_npm * pop->k_sd_npm),
+                                                      1.0 / (pop->kt_sd_npm * pop->kt_sd_npm)).asDiagonal();
+      const Eigen::Vector2d rhs =
+          precision * centre + pop_precision * Eigen::Vector2d(pop->k_mean_npm, pop->kt_mean_npm);
+      precision += pop_precision;
+      centre = precision.ldlt().solve(rhs);
+    }
+    const Eigen::Matrix2d region_cov = precision.inverse();
+    const double ci = (centre[0] - lattice.k_origin_npm) / lattice.dk_npm;
+    const double cj = (centre[1] - lattice.kt_origin_npm) / lattice.dkt_npm;
+    const int ri = static_cast<int>(std::ceil(std::sqrt(radius2 * region_cov(0, 0)) / lattice.dk_npm)) + 1;
+    const int rj = static_cast<int>(std::ceil(std::sqrt(radius2 * region_cov(1, 1)) / lattice.dkt_npm)) + 1;
+    auto& evaluated = evaluated_by_mode[mi];
+    std::vector<std::pair<int, int>> pending;
+    for (int i = static_cast<int>(std::floor(ci)) - ri; i <= static_cast<int>(std::ceil(ci)) + ri; ++i) {
+      for (int j = static_cast<int>(std::floor(cj)) - rj; j <= static_cast<int>(std::ceil(cj)) + rj; ++j) {
+        if (!admissible(i, j)) continue;
+        const Eigen::Vector2d d(lattice.k_at(i) - centre[0], lattice.kt_at(j) - centre[1]);
+        if (d.dot(precision * d) <= radius2) pending.emplace_back(i, j);
+      }
+    }
+    if (pending.empty()) pending.emplace_back(static_cast<int>(std::lround(ci)), static_cast<int>(std::lround(cj)));
+    for (int round = 0; !pending.empty() && round < 50; ++round) {
+      std::vector<double> k, kt, z;
+      for (const auto& [i, j] : pending) {
+        for (Eigen::Index l = 0; l < lines; ++l) {
+          k.push_back(lattice.k_at(i));
+          kt.push_back(lattice.kt_at(j));
+          z.push_back(surface.lateral_m(first_line + l));
+        }
+      }
+      const Eigen::ArrayXXd ifs = simulate(site, speed_mps, sprung_mass_kg, k, kt, z, parallel);
+      table.passes += static_cast<int>(k.size());
+      for (std::size_t p = 0; p < pending.size(); ++p) {
+        const NodeResult r = integrate_node(ifs.middleCols(static_cast<Eigen::Index>(p) * lines, lines), first_line,
+                                            surface, impact_factors, u_ref, rule);
+        evaluated[pending[p]] = r;
+        best_score = std::max(best_score, score(pending[p], r));
+        best_log_i = std::max(best_log_i, r.log_i_ref);
+      }
+      std::vector<std::pair<int, int>> next;
+      for (const auto& [ij, r] : evaluated) {
+        if (score(ij, r) < best_score - options.keep_nats) continue;
+        for (auto [di, dj] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+          const std::pair<int, int> nb{ij.first + di, ij.second + dj};
+          if (admissible(nb.first, nb.second) && !evaluated.count(nb) &&
+              std::find(next.begin(), next.end(), nb) == next.end())
+            next.push_back(nb);
+        }
+      }
+      if (!next.empty() && round == 0) table.region_clipped = true;
+      pending.swap(next);
+    }
+  }
+  table.modes = static_cast<int>(modes.size());
+
+  // Keep the nodes above the threshold; the truck's z-posterior variance is their weighted mean.
+  double wsum = 0.0, var_sum = 0.0;
+  int evaluated_nodes = 0;
+  for (const auto& evaluated : evaluated_by_mode) {
+  evaluated_nodes += static_cast<int>(evaluated.size());
+  for (const auto& [ij, r] : evaluated) {
+    if (score(ij, r) < best_score - options.keep_nats) continue;
+    table.k_index.push_back(ij.first);
+    table.kt_index.push_back(ij.second);
+    table.c.push_back(static_cast<float>(r.c));
+    table.m.push_back(static_cast<float>(r.m));
+    table.b.push_back(static_cast<float>(r.b));
+    table.z_mean_m.push_back(static_cast<float>(r.z_mean));
+    table.z_var_m2.push_back(static_cast<float>(r.z_var));
+    const double w = std::exp(r.log_i_ref - best_log_i);
+    wsum += w;
+    var_sum += w * r.z_var;
+  }
+  }
+  table.z_var_ref_m2 = var_sum / wsum;
+  table.u_ref = u_ref;
+  table.sensors = static_cast<int>(impact_factors.size());
+  table.nodes_evaluated = evaluated_nodes;
+  return table;
+}
+
+double reference_log_z_integral(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                                const Eigen::Ref<const Eigen::VectorXd>& impact_factors, double stiffness_npm,
+                                double tyre_stiffness_npm, double sigma_if, double lateral_mean_m,
+                                double lateral_sd_m) {
+  check_inputs(site, impact_factors);
+  const road::Surface& surface = site.surface();
+  const Eigen::Index L = surface.lines();
+  std::vector<double> k(static_cast<std::size_t>(L), stiffness_npm), kt(static_cast<std::size_t>(L), tyre_stiffness_npm),
+      z;
+  for (Eigen::Index j = 0; j < L; ++j) z.push_back(surface.lateral_m(j));
+  const Eigen::ArrayXXd ifs = simulate(site, speed_mps, sprung_mass_kg, k, kt, z);
+  const double u = 1.0 / (sigma_if * sigma_if);
+  // Fine composite rule: 8 sub-intervals of 16 points per segment, far beyond the table's.
+  const util::QuadratureRule rule = util::gauss_legendre01(16);
+  constexpr int kSub = 8;
+  const double lo = site.lateral_min_m(), hi = site.lateral_max_m();
+  const double mass = 0.5 * (std::erfc(-(hi - lateral_mean_m) / (lateral_sd_m * std::numbers::sqrt2)) -
+                             std::erfc(-(lo - lateral_mean_m) / (lateral_sd_m * std::numbers::sqrt2)));
+  std::vector<double> terms;
+  for (Eigen::Index j = 0; j + 1 < L; ++j) {
+    const Eigen::VectorXd ea = impact_factors - ifs.col(j).matrix();
+    const Eigen::VectorXd d = (ifs.col(j + 1) - ifs.col(j)).matrix();
+    const double aa = ea.squaredNorm(), ad = ea.dot(d), dd = d.squaredNorm();
+    for (int s = 0; s < kSub; ++s) {
+      for (std::size_t p = 0; p < rule.nodes.size(); ++p) {
+        const double w = (s + rule.nodes[p]) / kSub;
+        const double zz = surface.lateral_m(j) + w * surface.dy_m;
+        const double ssr = std::max(0.0, aa - 2.0 * w * ad + w * w * dd);
+        const double t = (zz - lateral_mean_m) / lateral_sd_m;
+        terms.push_back(std::log(rule.weights[p] * surface.dy_m / kSub) - 0.5 * u * ssr - 0.5 * t * t -
+                        std::log(lateral_sd_m * std::sqrt(2.0 * std::numbers::pi) * mass));
+      }
+    }
+  }
+  const double top = *std::max_element(terms.begin(), terms.end());
+  double sum = 0.0;
+  for (double t : terms) sum += std::exp(t - top);
+  return top + std::log(sum);
+}
+
+}  // namespace ssrfleet::model

@@ -1,0 +1,141 @@
+// One truck's likelihood with its lateral position integrated out, tabulated on the (k, k_t)
+// lattice that every truck shares (DESIGN.md §4, "the marginal is the road to a per-truck cost
+// that does not grow with n"). Built once, by the quarter-car integrator, when the truck
+// arrives; from then on the truck's marginal likelihood ℓ_i(θ) is a short sum over its nodes
+// (fleet_marginal.hpp), with no integrator call.
+//
+// What a node holds. At node g = (k_g, kt_g) the 16 impact factors are linear in the road input,
+// and the road is linear in z between two surface lines, so SSR_g(z) = Σ_m (y_m - IF_m(z))² is
+// piecewise quadratic in z. With u = 1/σ_IF² the z-integral of the data density is
+//   I_g(u) = ∫ exp(-u SSR_g(z) / 2) dz,
+// computed here by Gauss–Legendre quadrature on every segment between lines in a window around
+// the truck's best lateral position. Its dependence on σ_IF is carried by the Laplace form
+//   log I_g(u) ≈ c_g - m_g u / 2 - b_g log u,
+// whose three numbers match log I_g, its first and its second u-derivative at u_ref (the
+// derivatives are the mean and variance of SSR under the z-posterior). For a quadratic bowl in z
+// it is exact at every u (m = SSR_min, b = ½); elsewhere it is exact to second order at u_ref.
+// The lateral prior N(z | Z, σ_z²) enters through the node's z-posterior mean ẑ_g and the
+// truck's z-posterior variance s²(u) = s²_ref u_ref / u (moment matching:
+// ∫ f(z) N(z | Z, σ_z²) dz = I · N(ẑ | Z, σ_z² + s²) for a Gaussian f).
+//
+// Which nodes. Those whose log I_g(u_ref) is within `keep_nats` of the best node's: the rest
+// carry less than ~e^-keep_nats of the truck's likelihood and are dropped.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "site/site.hpp"
+#include "util/parallel_range.hpp"
+
+namespace ssrfleet::model {
+
+// The (k, k_t) nodes shared by every truck's table: node (i, j) sits at
+// (k_origin + i dk, kt_origin + j dkt). The node sum is the rectangle rule on this infinite
+// lattice, which for smooth integrands is spectrally accurate once the spacing is below about
+// the integrand's width (trapezoid rule on R; error ~ exp(-2π² (width / spacing)²)).
+struct Lattice {
+  double k_origin_npm = 0.0;
+  double dk_npm = 0.0;
+  double kt_origin_npm = 0.0;
+  double dkt_npm = 0.0;
+  bool valid() const { return dk_npm > 0.0 && dkt_npm > 0.0; }
+  double k_at(int i) const { return k_origin_npm + dk_npm * i; }
+  double kt_at(int j) const { return kt_origin_npm + dkt_npm * j; }
+};
+
+struct TruckTableOptions {
+  double sigma_ref = 0.02;     // σ_IF at which the table is expanded (u_ref = 1 / σ_ref²)
+  double keep_nats = 12.0;     // node kept if log I_g(u_ref) >= best - keep_nats
+  int points_per_segment = 10;    // Gauss–Legendre points per segment between two lines
+  // Where the best-fit search starts (a hint: e.g. the fleet's current mean); the table does not
+  // depend on it once the search finds the best fit.
+  double k_start_npm = 447e3;
+  double kt_start_npm = 1.58e6;
+  // True: the coarse search scans the lines at the start point only (a start from the fleet's
+  // posterior mean is good); false: at a 3 x 3 spread around it (the first trucks).
+  bool start_is_close = false;
+  // The fleet's stiffness distribution as the current posterior sees it (predictive mean and a
+  // generous sd). When set, a node is kept by its share of likelihood x this density, not of the
+  // likelihood alone: the likelihood's long flat tail towards stiff tyres, where no truck of the
+  // fleet is, then costs nothing. Nodes dropped this way matter only if the fleet posterior later
+  // moves several predictive sd, which FleetMarginal's rebuild rule watches.
+  struct Population {
+    double k_mean_npm = 0.0, k_sd_npm = 0.0, kt_mean_npm = 0.0, kt_sd_npm = 0.0;
+  };
+  std::optional<Population> population;
+  // Lateral lines: every line of the road is scanned at the fit; each run of segments within
+  // keep_nats of the best (a lateral mode) is tabulated on its own lines, widened by this many
+  // lines each side (a node's z-optimum moves a few mm to cm with (k, k_t)).
+  int z_margin_lines = 2;
+};
+
+// The best fit of (k, k_t, z) to one truck's impact factors, and the curvature of its
+// log-likelihood there (from the Gauss–Newton Hessian).
+struct TruckFit {
+  double stiffness_npm = 0.0;
+  double tyre_stiffness_npm = 0.0;
+  double lateral_m = 0.0;
+  double ssr = 0.0;                 // sum of squared residuals at the fit
+  double sigma_hat = 0.0;           // sqrt(ssr / (M - 3)): the truck's own noise estimate
+  // Likelihood sd of k and k_t at σ_IF = sigma (z profiled out): sd = unit_sd * sigma.
+  double stiffness_sd_per_sigma = 0.0;
+  double tyre_stiffness_sd_per_sigma = 0.0;
+  double stiffness_correlation = 0.0;  // corr(k, k_t) of the likelihood
+  int passes = 0;                   // integrator passes spent on the search
+};
+
+struct TruckTable {
+  // Per node (structure of arrays, one entry per kept node).
+  std::vector<std::int32_t> k_index, kt_index;  // lattice indices
+  std::vector<float> c, m, b;       // log I_g(u) ≈ c - m u / 2 - b log u
+  std::vector<float> z_mean_m;      // ẑ_g: the node's z-posterior mean at u_ref
+  std::vector<float> z_var_m2;      // s²_g: the node's z-posterior variance at u_ref
+  double z_var_ref_m2 = 0.0;        // the truck's mean z-posterior variance at u_ref (a summary)
+  double u_ref = 0.0;
+  int sensors = 0;
+  // Diagnostics.
+  TruckFit fit;
+  int nodes_evaluated = 0;          // before dropping
+  int passes = 0;                   // integrator passes in all (search included)
+  bool region_clipped = false;      // a node above the threshold sat on the searched region's edge
+  int modes = 1;                    // lateral modes tabulated (runs of lines within the threshold)
+
+  std::size_t nodes() const { return c.size(); }
+  std::size_t bytes() const;        // memory held
+};
+
+// Finds the best fit (Gauss–Newton from a coarse search over z at a few (k, k_t)).
+TruckFit fit_truck(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                   const Eigen::Ref<const Eigen::VectorXd>& impact_factors, const TruckTableOptions& options);
+
+// Builds the table of one truck on `lattice`. DataError-free: the record was checked on input;
+// UsageError if the lattice is invalid or the impact factors do not match the site's sensors.
+TruckTable build_truck_table(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                             const Eigen::Ref<const Eigen::VectorXd>& impact_factors, const Lattice& lattice,
+                             const TruckTableOptions& options);
+
+// The same, with the fit already done (a rebuild on a new lattice reuses it).
+TruckTable build_truck_table(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                             const Eigen::Ref<const Eigen::VectorXd>& impact_factors, const Lattice& lattice,
+                             const TruckTableOptions& options, const TruckFit& fit);
+
+// The same with the integrator passes of each round split over `parallel` (same bits).
+TruckTable build_truck_table(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                             const Eigen::Ref<const Eigen::VectorXd>& impact_factors, const Lattice& lattice,
+                             const TruckTableOptions& options, const TruckFit& fit,
+                             const util::ParallelRange& parallel);
+
+// The brute-force reference the tables are tested against: log ∫ exp(-u SSR(k, kt, z) / 2)
+// N(z | Z, σ_z²) dz over the whole road width at one (k, k_t), by adaptive composite
+// Gauss–Legendre on every segment (z prior truncated to the road and normalised).
+double reference_log_z_integral(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                                const Eigen::Ref<const Eigen::VectorXd>& impact_factors, double stiffness_npm,
+                                double tyre_stiffness_npm, double sigma_if, double lateral_mean_m,
+                                double lateral_sd_m);
+
+}  // namespace ssrfleet::model
