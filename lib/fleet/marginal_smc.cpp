@@ -52,8 +52,11 @@ PosteriorCloud MarginalSmc::cloud() const {
   c.method = "smc";
   c.theta = target_.theta();
   c.weights = sampler_.weights();
-  c.speed_mps = target_.speed_mps();
-  c.sprung_mass_kg = target_.sprung_mass_kg();
+  const auto& v = target_.speed_mps();
+  const auto& m = target_.sprung_mass_kg();
+  const std::size_t from = v.size() > kPredictionPool ? v.size() - kPredictionPool : 0;
+  c.speed_mps.assign(v.begin() + static_cast<std::ptrdiff_t>(from), v.end());
+  c.sprung_mass_kg.assign(m.begin() + static_cast<std::ptrdiff_t>(from), m.end());
   c.site_fingerprint = site_.fingerprint();
   c.road_name = site_.surface().name;
   c.sensors = site_.sensors();
@@ -72,6 +75,13 @@ constexpr std::uint32_t kCheckpointVersion = 2;
 }  // namespace
 
 void MarginalSmc::save(io::BinaryWriter& out) const {
+  save_state(out);
+  save_trucks(out, 0, truck_ids_.size());
+}
+
+void MarginalSmc::restore(io::BinaryReader& in) { restore_split(in, in); }
+
+void MarginalSmc::save_state(io::BinaryWriter& out) const {
   out.value(kCheckpointMagic);
   out.value(kCheckpointVersion);
   out.text(site_.fingerprint());
@@ -81,17 +91,23 @@ void MarginalSmc::save(io::BinaryWriter& out) const {
   out.value<std::int32_t>(state.moves_run);
   out.value(state.log_evidence);
   out.matrix(state.log_weights.matrix());
-  out.value<std::uint64_t>(truck_ids_.size());
-  for (const auto& id : truck_ids_) out.text(id);
-  target_.save(out);
+  target_.save_particles(out);
 }
 
-void MarginalSmc::restore(io::BinaryReader& in) {
+void MarginalSmc::save_trucks(io::BinaryWriter& out, std::size_t begin, std::size_t end) const {
+  for (std::size_t i = begin; i < end; ++i) {
+    out.text(truck_ids_[i]);
+    target_.save_trucks(out, i, i + 1);
+  }
+}
+
+void MarginalSmc::restore_split(io::BinaryReader& in, io::BinaryReader& trucks) {
   if (in.value<std::uint64_t>("magic") != kCheckpointMagic) in.fail("magic", "not an ssrfleet checkpoint");
   const auto version = in.value<std::uint32_t>("version");
   if (version == 1) {
     in.fail("version", "checkpoint format version 1 was written by the latent-variable core of ssrfleet 0.1; this "
-                       "build's core reads version 2: replay the log into a new state");
+                       "build's default core reads version 2: replay the log into a new state directory (or resume "
+                       "it with --window, which keeps the latent core)");
   }
   if (version != kCheckpointVersion) in.fail("version", "unsupported checkpoint format version " + std::to_string(version));
   if (in.text("site") != site_.fingerprint()) {
@@ -105,12 +121,12 @@ void MarginalSmc::restore(io::BinaryReader& in) {
   state.moves_run = in.value<std::int32_t>("moves_run");
   state.log_evidence = in.value<double>("log_evidence");
   state.log_weights = in.matrix("log_weights", sampler_.options().particles, 1).array();
-  const auto n = in.value<std::uint64_t>("truck_ids");
-  if (n > 100'000'000) in.fail("truck_ids", "implausible truck count");
+  const std::uint64_t n = target_.load_particles(in);
   truck_ids_.clear();
-  for (std::uint64_t j = 0; j < n; ++j) truck_ids_.push_back(in.text("truck_id"));
-  target_.load(in);
-  if (n != static_cast<std::uint64_t>(target_.trucks())) in.fail("trucks", "truck ids and tables disagree");
+  for (std::uint64_t i = 0; i < n; ++i) {
+    truck_ids_.push_back(trucks.text("truck_id"));
+    target_.load_trucks(trucks, 1);
+  }
   sampler_.restore(state);
 }
 

@@ -55,8 +55,21 @@ class MarginalSmc {
   // What the last absorb() rebuilt, if anything ("" = nothing).
   const std::string& last_rebuild() const { return last_rebuild_; }
 
+  // Checkpoint of everything the next truck depends on, so a restored run continues bit-identically.
   void save(io::BinaryWriter& out) const;
   void restore(io::BinaryReader& in);
+  // The same in two parts for a stream (O(1) per truck): the particles and settings, and the
+  // trucks [begin, end) (id, data, fit, table), which a stream appends to a log. A rebuild of the
+  // tables changes every truck's record: table_generation() then moves on, and the whole log must
+  // be written again. restore_split() reads the state, then as many truck records as it names.
+  void save_state(io::BinaryWriter& out) const;
+  void save_trucks(io::BinaryWriter& out, std::size_t begin, std::size_t end) const;
+  void restore_split(io::BinaryReader& state, io::BinaryReader& trucks);
+  int table_generation() const { return target_.rebuilds(); }
+
+  // Observed (speed, mass) pairs that predictions draw from: the most recent ones, so a year-long
+  // stream's posterior file stays the same size.
+  static constexpr std::size_t kPredictionPool = 10000;
 
  private:
   const site::Site& site_;

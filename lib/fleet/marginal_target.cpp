@@ -354,21 +354,14 @@ namespace {
 constexpr std::uint64_t kMagic = 0x4e52414d46525353ULL;  // "SSRFMARN"
 constexpr std::uint32_t kVersion = 1;
 
-template <class T>
-void write_vector(io::BinaryWriter& out, const std::vector<T>& v) {
-  out.value<std::uint64_t>(v.size());
-  for (const T& x : v) out.value(x);
-}
-template <class T>
-void read_vector(io::BinaryReader& in, std::vector<T>& v, const char* what, std::uint64_t limit) {
-  const auto n = in.value<std::uint64_t>(what);
-  if (n > limit) in.fail(what, "implausible length " + std::to_string(n));
-  v.resize(static_cast<std::size_t>(n));
-  for (auto& x : v) x = in.value<T>(what);
-}
 }  // namespace
 
 void MarginalTarget::save(io::BinaryWriter& out) const {
+  save_particles(out);
+  save_trucks(out, 0, static_cast<std::size_t>(trucks()));
+}
+
+void MarginalTarget::save_particles(io::BinaryWriter& out) const {
   if (mode_ != Mode::kIdle) throw std::logic_error("MarginalTarget::save: mid-stage");
   out.value(kMagic);
   out.value(kVersion);
@@ -383,32 +376,40 @@ void MarginalTarget::save(io::BinaryWriter& out) const {
   out.value<std::int64_t>(passes_);
   out.matrix(theta_);
   out.matrix(base_sum_.matrix());
-  write_vector(out, speed_mps_);
-  write_vector(out, sprung_mass_kg_);
-  for (const auto& y : observed_if_) out.matrix(y);
-  write_vector(out, fits_);
-  const auto& c = store_.columns();
-  write_vector(out, c.k_index);
-  write_vector(out, c.kt_index);
-  write_vector(out, c.c);
-  write_vector(out, c.m);
-  write_vector(out, c.b);
-  write_vector(out, c.z_mean_m);
-  write_vector(out, c.z_var_m2);
-  write_vector(out, c.offset);
-  write_vector(out, c.count);
-  write_vector(out, c.u_ref);
+  out.value<std::uint64_t>(speed_mps_.size());
 }
 
-void MarginalTarget::load(io::BinaryReader& in) {
+void MarginalTarget::save_trucks(io::BinaryWriter& out, std::size_t begin, std::size_t end) const {
+  for (std::size_t i = begin; i < end; ++i) {
+    out.value(speed_mps_[i]);
+    out.value(sprung_mass_kg_[i]);
+    out.matrix(observed_if_[i]);
+    out.value(fits_[i]);
+    const model::TableView v = store_.view(i);
+    out.value<std::uint32_t>(static_cast<std::uint32_t>(v.nodes));
+    out.value(v.u_ref);
+    auto write = [&](const auto* p) {
+      for (std::size_t g = 0; g < v.nodes; ++g) out.value(p[g]);
+    };
+    write(v.k_index);
+    write(v.kt_index);
+    write(v.c);
+    write(v.m);
+    write(v.b);
+    write(v.z_mean_m);
+    write(v.z_var_m2);
+  }
+}
+
+std::uint64_t MarginalTarget::load_particles(io::BinaryReader& in) {
   if (in.value<std::uint64_t>("marginal target") != kMagic) in.fail("marginal target", "not a marginal-core state");
   const auto version = in.value<std::uint32_t>("marginal target version");
   if (version != kVersion) {
     in.fail("marginal target version", "format version " + std::to_string(version) + ", this build reads " +
                                            std::to_string(kVersion));
   }
-  constexpr std::uint64_t kMaxTrucks = 100'000'000, kMaxNodes = 4'000'000'000ULL;
   settings_.lattice = in.value<model::Lattice>("lattice");
+  if (!settings_.lattice.valid() && settings_.lattice.dk_npm != 0.0) in.fail("lattice", "non-positive spacing");
   settings_.sigma_ref = in.value<double>("sigma_ref");
   settings_.population.reset();
   if (in.value<std::uint8_t>("population")) settings_.population = in.value<model::TruckTableOptions::Population>("population");
@@ -421,34 +422,52 @@ void MarginalTarget::load(io::BinaryReader& in) {
   theta_ = in.matrix("theta", kHyperCount, options_.particles);
   base_sum_ = in.matrix("log-likelihood sums", options_.particles, 1).array();
   inc_ = Eigen::ArrayXd::Zero(options_.particles);
-  read_vector(in, speed_mps_, "speeds", kMaxTrucks);
-  read_vector(in, sprung_mass_kg_, "masses", kMaxTrucks);
-  if (sprung_mass_kg_.size() != speed_mps_.size()) in.fail("masses", "count differs from the speeds'");
+  const auto n = in.value<std::uint64_t>("trucks");
+  if (n > 100'000'000ULL) in.fail("trucks", "implausible truck count " + std::to_string(n));
+  speed_mps_.clear();
+  sprung_mass_kg_.clear();
   observed_if_.clear();
-  for (std::size_t i = 0; i < speed_mps_.size(); ++i) observed_if_.push_back(in.matrix("impact factors", site_.sensors(), 1));
-  read_vector(in, fits_, "fits", kMaxTrucks);
-  auto& c = store_.columns();
-  read_vector(in, c.k_index, "table k index", kMaxNodes);
-  read_vector(in, c.kt_index, "table kt index", kMaxNodes);
-  read_vector(in, c.c, "table c", kMaxNodes);
-  read_vector(in, c.m, "table m", kMaxNodes);
-  read_vector(in, c.b, "table b", kMaxNodes);
-  read_vector(in, c.z_mean_m, "table z mean", kMaxNodes);
-  read_vector(in, c.z_var_m2, "table z var", kMaxNodes);
-  read_vector(in, c.offset, "table offsets", kMaxTrucks);
-  read_vector(in, c.count, "table counts", kMaxTrucks);
-  read_vector(in, c.u_ref, "table u_ref", kMaxTrucks);
-  const std::size_t n = speed_mps_.size();
-  const std::size_t nodes = c.c.size();
-  bool ok = fits_.size() == n && c.offset.size() == n && c.count.size() == n && c.u_ref.size() == n &&
-            c.k_index.size() == nodes && c.kt_index.size() == nodes && c.m.size() == nodes && c.b.size() == nodes &&
-            c.z_mean_m.size() == nodes && c.z_var_m2.size() == nodes;
-  for (std::size_t i = 0; ok && i < n; ++i) ok = c.offset[i] + c.count[i] <= nodes;
-  if (!ok) in.fail("tables", "the table arrays disagree in length");
+  fits_.clear();
+  store_ = model::TableStore{};
+  store_.reserve(static_cast<std::size_t>(n), 0);
   marginal_ = model::FleetMarginal(site_.sensors(), lateral_, settings_.lattice);
   mode_ = Mode::kIdle;
   old_store_.reset();
   old_marginal_.reset();
+  return n;
+}
+
+void MarginalTarget::load_trucks(io::BinaryReader& in, std::uint64_t count) {
+  for (std::uint64_t i = 0; i < count; ++i) {
+    speed_mps_.push_back(in.value<double>("truck speed"));
+    sprung_mass_kg_.push_back(in.value<double>("truck mass"));
+    observed_if_.push_back(in.matrix("impact factors", site_.sensors(), 1));
+    fits_.push_back(in.value<model::TruckFit>("truck fit"));
+    model::TruckTable t;
+    const auto nodes = in.value<std::uint32_t>("table nodes");
+    if (nodes > 1'000'000) in.fail("table nodes", "implausible node count " + std::to_string(nodes));
+    t.u_ref = in.value<double>("table u_ref");
+    auto read = [&](auto& v, const char* what) {
+      v.resize(nodes);
+      for (auto& x : v) x = in.value<std::remove_reference_t<decltype(x)>>(what);
+    };
+    read(t.k_index, "table k index");
+    read(t.kt_index, "table kt index");
+    read(t.c, "table c");
+    read(t.m, "table m");
+    read(t.b, "table b");
+    read(t.z_mean_m, "table z mean");
+    read(t.z_var_m2, "table z var");
+    if (!(t.u_ref > 0.0) || !std::isfinite(speed_mps_.back()) || !std::isfinite(sprung_mass_kg_.back())) {
+      in.fail("truck", "a truck record holds impossible values");
+    }
+    store_.append(t);
+  }
+}
+
+void MarginalTarget::load(io::BinaryReader& in) {
+  const std::uint64_t n = load_particles(in);
+  load_trucks(in, n);
 }
 
 }  // namespace ssrfleet::fleet

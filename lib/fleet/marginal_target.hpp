@@ -100,6 +100,14 @@ class MarginalTarget final : public smc::TemperedModel {
   // Checkpoint: the particles, the data and the tables (so a resume does not rebuild them).
   void save(io::BinaryWriter& out) const;
   void load(io::BinaryReader& in);
+  // The same in two parts, so that a stream's checkpoint per truck costs O(1): the particles and
+  // settings (fixed size), and the trucks (data, fit and table of each) in [begin, end), which a
+  // stream appends to a log; load_trucks() reads `count` such records after load_particles().
+  void save_particles(io::BinaryWriter& out) const;
+  void save_trucks(io::BinaryWriter& out, std::size_t begin, std::size_t end) const;
+  // Returns the number of trucks the particles belong to (load that many with load_trucks).
+  std::uint64_t load_particles(io::BinaryReader& in);
+  void load_trucks(io::BinaryReader& in, std::uint64_t count);
 
   // smc::TemperedModel
   Eigen::Index particles() const override { return options_.particles; }

@@ -21,6 +21,13 @@ class MarginalFit final : public OnlineFit {
   std::string note() const override {
     return smc_.last_rebuild().empty() ? "" : "tables rebuilt (" + smc_.last_rebuild() + ")";
   }
+  bool splits_state() const override { return true; }
+  void save_state(io::BinaryWriter& out) const override { smc_.save_state(out); }
+  void save_trucks(io::BinaryWriter& out, std::size_t begin, std::size_t end) const override {
+    smc_.save_trucks(out, begin, end);
+  }
+  int table_generation() const override { return smc_.table_generation(); }
+  void restore_split(io::BinaryReader& state, io::BinaryReader& trucks) override { smc_.restore_split(state, trucks); }
 
  private:
   MarginalSmc smc_;

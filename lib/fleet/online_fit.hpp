@@ -37,6 +37,15 @@ class OnlineFit {
   virtual std::string core() const = 0;  // "marginal" or "latent"
   // A line for progress output after absorb(): what the last record cost beyond its stage.
   virtual std::string note() const { return ""; }
+
+  // A state in two parts for a stream, so its checkpoint per truck costs O(1): a fixed-size part
+  // and a log of truck records to append to (whole again after table_generation() moves on).
+  // A core without the split keeps one state (save/restore) and writes no truck log.
+  virtual bool splits_state() const { return false; }
+  virtual void save_state(io::BinaryWriter& out) const { save(out); }
+  virtual void save_trucks(io::BinaryWriter& /*out*/, std::size_t /*begin*/, std::size_t /*end*/) const {}
+  virtual int table_generation() const { return 0; }
+  virtual void restore_split(io::BinaryReader& state, io::BinaryReader& /*trucks*/) { restore(state); }
 };
 
 struct OnlineFitOptions {

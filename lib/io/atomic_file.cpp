@@ -35,4 +35,14 @@ void write_file_atomically(const std::string& path, const std::function<void(std
   }
 }
 
+void append_file_synced(const std::string& path, const std::string& bytes) {
+  FILE* f = std::fopen(path.c_str(), "ab");
+  if (f == nullptr) throw IoError("cannot open '" + path + "' for appending: " + std::strerror(errno));
+  const bool written = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size() && std::fflush(f) == 0 &&
+                       ::fsync(fileno(f)) == 0;
+  const int err = errno;
+  const bool closed = std::fclose(f) == 0;
+  if (!written || !closed) throw IoError("appending to '" + path + "' failed (disk full?): " + std::strerror(err));
+}
+
 }  // namespace ssrfleet::io

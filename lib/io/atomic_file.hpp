@@ -13,4 +13,9 @@ namespace ssrfleet::io {
 // including an exception thrown by `write`.
 void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write);
 
+// Appends bytes to `path` (created if missing) and fsyncs it before returning, so a checkpoint
+// written afterwards may count on them. IoError naming the path on any failure; a failed append
+// may leave a partial tail, which the caller's checkpoint (naming the good length) cuts off.
+void append_file_synced(const std::string& path, const std::string& bytes);
+
 }  // namespace ssrfleet::io

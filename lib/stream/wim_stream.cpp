@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <sstream>
 #include <thread>
 #include <unordered_set>
 
@@ -19,6 +20,11 @@ namespace fs = std::filesystem;
 
 namespace {
 std::string path_in(const std::string& dir, const char* name) { return (fs::path(dir) / name).string(); }
+// The stream checkpoint's header (version 2: bookkeeping first, then the core's state, with the
+// marginal core's truck log beside it). Version 1 began with the core's own magic word.
+constexpr std::uint64_t kStreamMagic = 0x4d52545346525353ULL;       // "SSRFSTRM"
+constexpr std::uint32_t kStreamVersion = 2;
+constexpr std::uint64_t kOldCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
 }  // namespace
 
 WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream* progress, std::ostream& reports)
@@ -35,10 +41,46 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   std::ifstream in(checkpoint, std::ios::binary);
   if (!in) throw IoError("stream: cannot read '" + checkpoint + "'");
   io::BinaryReader reader(in, checkpoint);
-  smc_->restore(reader);
+  const auto magic = reader.value<std::uint64_t>("magic");
+  if (magic == kOldCheckpointMagic) {
+    reader.fail("format", "stream state format version 1 (ssrfleet 0.1, latent core, before the truck log): this build "
+                          "writes version 2; replay the log into a new state directory");
+  }
+  if (magic != kStreamMagic) reader.fail("magic", "not an ssrfleet stream checkpoint");
+  const auto version = reader.value<std::uint32_t>("version");
+  if (version != kStreamVersion) {
+    reader.fail("version", "stream state format version " + std::to_string(version) + ", this build reads " +
+                               std::to_string(kStreamVersion));
+  }
   checkpoint_source_ = reader.text("source");
   checkpoint_lines_ = reader.value<std::uint64_t>("lines_consumed");
   rejects_bytes_ = reader.value<std::uint64_t>("rejects_bytes");
+  const bool split = reader.value<std::uint8_t>("split") != 0;
+  trucks_written_ = reader.value<std::uint64_t>("trucks_written");
+  trucks_bytes_ = reader.value<std::uint64_t>("trucks_bytes");
+  trucks_generation_ = reader.value<std::int32_t>("trucks_generation");
+  if (split != smc_->splits_state()) {
+    reader.fail("core", std::string("the state was written by the ") + (split ? "marginal" : "latent") +
+                            " core; resume it with the same core (--window selects the latent one)");
+  }
+  if (split) {
+    // A crash between appending to the truck log and this checkpoint leaves a tail: cut it off.
+    const std::string log = path_in(options_.state_dir, "trucks.bin");
+    if (!fs::exists(log) || fs::file_size(log) < trucks_bytes_) {
+      reader.fail("trucks_bytes", "'" + log + "' is missing or shorter than the checkpoint says (" +
+                                      std::to_string(trucks_bytes_) + " bytes)");
+    }
+    if (fs::file_size(log) > trucks_bytes_) fs::resize_file(log, trucks_bytes_);
+    std::ifstream trucks_in(log, std::ios::binary);
+    if (!trucks_in) throw IoError("stream: cannot read '" + log + "'");
+    io::BinaryReader trucks(trucks_in, log);
+    smc_->restore_split(reader, trucks);
+    if (static_cast<std::uint64_t>(smc_->trucks_seen()) != trucks_written_) {
+      reader.fail("trucks_written", "the checkpoint and the truck log disagree on the truck count");
+    }
+  } else {
+    smc_->restore(reader);
+  }
   resumed_ = true;
   // Records rejected after the checkpoint will be read and rejected again: cut them off here so
   // rejects.csv lists each bad record once.
@@ -49,13 +91,37 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   }
 }
 
-void WimStream::save_state(const std::string& source, std::size_t lines_consumed) const {
+void WimStream::save_state(const std::string& source, std::size_t lines_consumed) {
+  if (smc_->splits_state()) {
+    const std::string log = path_in(options_.state_dir, "trucks.bin");
+    const auto n = static_cast<std::uint64_t>(smc_->trucks_seen());
+    if (smc_->table_generation() != trucks_generation_ || trucks_written_ > n) {
+      io::write_file_atomically(log, [&](std::ostream& os) {
+        io::BinaryWriter out(os);
+        smc_->save_trucks(out, 0, n);
+      });
+      trucks_generation_ = smc_->table_generation();
+    } else if (n > trucks_written_) {
+      std::ostringstream records;
+      io::BinaryWriter out(records);
+      smc_->save_trucks(out, trucks_written_, n);
+      io::append_file_synced(log, records.str());
+    }
+    trucks_written_ = n;
+    trucks_bytes_ = fs::file_size(log);
+  }
   io::write_file_atomically(path_in(options_.state_dir, "checkpoint.bin"), [&](std::ostream& os) {
     io::BinaryWriter out(os);
-    smc_->save(out);
+    out.value(kStreamMagic);
+    out.value(kStreamVersion);
     out.text(source);
     out.value<std::uint64_t>(lines_consumed);
     out.value<std::uint64_t>(rejects_bytes_);
+    out.value<std::uint8_t>(smc_->splits_state() ? 1 : 0);
+    out.value<std::uint64_t>(trucks_written_);
+    out.value<std::uint64_t>(trucks_bytes_);
+    out.value<std::int32_t>(trucks_generation_);
+    smc_->save_state(out);
   });
   io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), smc_->cloud());
 }

@@ -3,8 +3,13 @@
 // always holds a consistent posterior and a checkpoint to resume from.
 //
 // State directory:
-//   checkpoint.bin   everything the next truck depends on (OnlineFit::save) plus the stream's
-//                    own bookkeeping; rewritten atomically after every absorbed truck
+//   checkpoint.bin   the stream's bookkeeping, then the core's state; rewritten atomically after
+//                    every absorbed truck. Its size does not grow with the trucks absorbed on the
+//                    default (marginal) core: their records are in trucks.bin
+//   trucks.bin       the marginal core's truck records (id, data, fit, table), appended and synced
+//                    before the checkpoint that counts them; rewritten whole after a table rebuild
+//                    (a few times per doubling of the early stream, none later). A crash between
+//                    the append and the checkpoint leaves a tail that the resume cuts off
 //   posterior.json   the posterior file `predict --posterior DIR` reads; rewritten atomically
 //   rejects.csv      every rejected record verbatim, each after a '# line N: reason' comment, under
 //                    a copy of the input's header, so it is itself a WIM log to fix and replay
@@ -59,7 +64,7 @@ class WimStream {
   StreamCounts run(std::istream& in, const std::string& source, const std::atomic<bool>& stop);
 
  private:
-  void save_state(const std::string& source, std::size_t lines_consumed) const;
+  void save_state(const std::string& source, std::size_t lines_consumed);
   void report() const;
 
   const site::Site& site_;
@@ -72,6 +77,10 @@ class WimStream {
   std::string checkpoint_source_;
   std::size_t checkpoint_lines_ = 0;
   std::uint64_t rejects_bytes_ = 0;
+  // The truck log (marginal core): records written, its length, and the table generation they hold.
+  std::uint64_t trucks_written_ = 0;
+  std::uint64_t trucks_bytes_ = 0;
+  int trucks_generation_ = -1;
 };
 
 }  // namespace ssrfleet::stream
