@@ -259,6 +259,9 @@ TEST_CASE("bad batch MCMC options are rejected with a message naming the option"
       {[](auto& o) { o.prior.lo[fleet::kSigmaK] = o.prior.hi[fleet::kSigmaK]; }, "sigma_k"},
       {[](auto& o) { o.freeze_latents = true; }, "freeze_latents"},
       {[](auto& o) { o.initial_theta = fleet::HyperVector{}; }, "initial_theta"},
+      {[](auto& o) { o.ancillary_steps = 0; }, "ancillary_steps"},
+      {[](auto& o) { o.ancillary_every = 0; }, "ancillary_every"},
+      {[](auto& o) { o.threads = -1; }, "threads"},
   };
   fleet::BatchMcmcOptions good;
   std::string error;
@@ -439,8 +442,15 @@ TEST_CASE("batch MCMC on 30 simulated trucks brackets the true K and Kt and Z an
   // Adapted towards 0.3 and frozen: the post-burn-in rate lands near it.
   CHECK(r.latent_acceptance > 0.15);
   CHECK(r.latent_acceptance < 0.5);
-  // One batched pass per sweep plus the grid search (51 lateral positions per truck).
-  CHECK(r.integrator_passes <= 30LL * 51 + 30LL * 6000);
+  // One batched pass per sweep plus the grid search (51 lateral positions per truck), plus one per
+  // ancillary step of each interwoven block once theta is free.
+  const long long interwoven_blocks =
+      o.interweave
+          ? int{o.interweave_stiffness} + int{o.interweave_tyre_stiffness} + int{o.interweave_lateral}
+          : 0;
+  CHECK(r.integrator_passes <= 30LL * 51 + 30LL * 6000 +
+                                   interwoven_blocks * o.ancillary_steps * 30LL *
+                                       ((6000 - o.hold_theta_sweeps) / o.ancillary_every + 1));
   CHECK(r.integrator_calls >= 6000);
   check_credible_intervals(r, 0.02);
   // Truck lateral positions: the posterior means track the truth for most trucks.

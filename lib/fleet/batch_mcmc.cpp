@@ -5,17 +5,24 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <thread>
 
 #include <Eigen/Cholesky>
 #include <boost/random/mersenne_twister.hpp>
 #include <boost/random/normal_distribution.hpp>
 
+#include "fleet/batch_mcmc_interweave.hpp"
+#include "fleet/batch_mcmc_residuals.hpp"
 #include "fleet/truncated_samplers.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::fleet {
 
 namespace {
+
+using detail::gather;
+using detail::Observations;
+using detail::ResidualEvaluator;
 
 using Engine = boost::random::mt19937_64;
 using Clock = std::chrono::steady_clock;
@@ -26,87 +33,6 @@ double seconds_since(Clock::time_point start) {
 }
 
 double log_uniform(Engine& engine) { return std::log(uniform_open01(engine)); }
-
-// The observed data in the arrays the sampler works on.
-struct Observations {
-  Eigen::ArrayXd speed_mps;
-  Eigen::ArrayXd sprung_mass_kg;
-  Eigen::ArrayXXd impact_factor;  // sensors x trucks
-  int trucks = 0;
-  int sensors = 0;
-};
-
-Observations gather(const site::Site& site, const std::vector<io::WimRecord>& records) {
-  if (records.empty()) throw DataError("batch MCMC: no WIM records to fit");
-  Observations obs;
-  obs.trucks = static_cast<int>(records.size());
-  obs.sensors = site.sensors();
-  obs.speed_mps.resize(obs.trucks);
-  obs.sprung_mass_kg.resize(obs.trucks);
-  obs.impact_factor.resize(obs.sensors, obs.trucks);
-  for (int n = 0; n < obs.trucks; ++n) {
-    const io::WimRecord& r = records[static_cast<std::size_t>(n)];
-    if (r.impact_factor.size() != obs.sensors) {
-      throw DataError("batch MCMC: truck '" + r.truck_id + "' has " + std::to_string(r.impact_factor.size()) +
-                      " impact factors but the site has " + std::to_string(obs.sensors) + " sensors");
-    }
-    if (!r.impact_factor.allFinite() || !(r.speed_mps > 0.0) || !(r.sprung_mass_kg > 0.0)) {
-      throw DataError("batch MCMC: truck '" + r.truck_id +
-                      "' has a non-finite impact factor or a non-positive speed or mass");
-    }
-    obs.speed_mps[n] = r.speed_mps;
-    obs.sprung_mass_kg[n] = r.sprung_mass_kg;
-    obs.impact_factor.col(n) = r.impact_factor.array();
-  }
-  return obs;
-}
-
-// Runs the trucks `which` (indices into obs) with the given (k, kt, z) through the site in
-// batches and returns each one's sum of squared residuals against its observations (+inf where
-// the integrator returned something non-finite).
-class ResidualEvaluator {
- public:
-  ResidualEvaluator(const site::Site& site, const Observations& obs) : site_(site), obs_(obs) {}
-
-  void evaluate(const std::vector<int>& which, const Eigen::ArrayXd& k, const Eigen::ArrayXd& kt,
-                const Eigen::ArrayXd& z, Eigen::ArrayXd& ssr_out) {
-    constexpr Eigen::Index kChunk = 2048;
-    const auto total = static_cast<Eigen::Index>(which.size());
-    ssr_out.resize(total);
-    for (Eigen::Index start = 0; start < total; start += kChunk) {
-      const Eigen::Index count = std::min(kChunk, total - start);
-      batch_.resize(count);
-      for (Eigen::Index i = 0; i < count; ++i) {
-        const int n = which[static_cast<std::size_t>(start + i)];
-        batch_.speed_mps[i] = obs_.speed_mps[n];
-        batch_.sprung_mass_kg[i] = obs_.sprung_mass_kg[n];
-        batch_.stiffness_npm[i] = k[start + i];
-        batch_.tyre_stiffness_npm[i] = kt[start + i];
-        batch_.lateral_m[i] = z[start + i];
-      }
-      if_.resize(obs_.sensors, count);
-      site_.impact_factors(batch_, if_);
-      ++calls_;
-      passes_ += count;
-      for (Eigen::Index i = 0; i < count; ++i) {
-        const int n = which[static_cast<std::size_t>(start + i)];
-        const double s = (if_.col(i) - obs_.impact_factor.col(n)).square().sum();
-        ssr_out[start + i] = std::isfinite(s) ? s : std::numeric_limits<double>::infinity();
-      }
-    }
-  }
-
-  long long calls() const { return calls_; }
-  long long passes() const { return passes_; }
-
- private:
-  const site::Site& site_;
-  const Observations& obs_;
-  site::TruckBatch batch_;
-  Eigen::ArrayXXd if_;
-  long long calls_ = 0;
-  long long passes_ = 0;
-};
 
 double clip(double v, double lo, double hi) { return std::clamp(v, lo, hi); }
 
@@ -213,6 +139,9 @@ bool BatchMcmcOptions::IsValid(std::string* error) const {
   }
   SSRFLEET_OPTION_CHECK(!freeze_latents || initial_latents.has_value(), "freeze_latents", "true",
                         "false unless initial_latents is given");
+  SSRFLEET_OPTION_CHECK(ancillary_steps >= 1, "ancillary_steps", ancillary_steps, ">= 1");
+  SSRFLEET_OPTION_CHECK(ancillary_every >= 1, "ancillary_every", ancillary_every, ">= 1");
+  SSRFLEET_OPTION_CHECK(threads >= 0, "threads", threads, ">= 0 (0 = all hardware threads)");
   return true;
 }
 
@@ -248,9 +177,13 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::Wim
 
   Engine engine(options.seed);
   boost::random::normal_distribution<double> normal(0.0, 1.0);
-  ResidualEvaluator evaluator(site, obs);
+  const int threads = options.threads > 0
+                          ? options.threads
+                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  ResidualEvaluator evaluator(site, obs, threads);
 
   BatchMcmcResult result;
+  result.threads = threads;
   result.iterations = options.iterations;
   result.burn_in = options.burn_in;
   result.truck_ids.reserve(records.size());
@@ -368,8 +301,41 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::Wim
   valid.reserve(static_cast<std::size_t>(N));
   Eigen::ArrayXd k_prop, kt_prop, z_prop, ssr_prop;
 
+  // Interweaving: one ancillary updater per interwoven block, and the SSR of every truck with
+  // one latent coordinate replaced (the other two at their current values).
+  const bool interweave = options.interweave && !options.freeze_latents;
+  AncillaryUpdater ancillary_k(kK, kSigmaK, false, N), ancillary_kt(kKt, kSigmaKt, false, N),
+      ancillary_z(kZ, kSigmaZ, true, N);
+  Eigen::ArrayXd latent_column;
+  auto ssr_with = [&](int latent) {
+    return [&, latent](const Eigen::ArrayXd& values, Eigen::ArrayXd& ssr_out) {
+      const Eigen::ArrayXd k = latent == kStiffness ? values : Eigen::ArrayXd(x.col(kStiffness).array());
+      const Eigen::ArrayXd kt =
+          latent == kTyreStiffness ? values : Eigen::ArrayXd(x.col(kTyreStiffness).array());
+      const Eigen::ArrayXd z = latent == kLateral ? values : Eigen::ArrayXd(x.col(kLateral).array());
+      evaluator.evaluate(all, k, kt, z, ssr_out);
+    };
+  };
+  const AncillarySsrFunction ssr_with_k = ssr_with(kStiffness), ssr_with_kt = ssr_with(kTyreStiffness),
+                             ssr_with_z = ssr_with(kLateral);
+  auto ancillary_steps = [&](AncillaryUpdater& updater, int latent, const AncillarySsrFunction& ssr_of,
+                             bool burning_in, bool collect) {
+    latent_column = x.col(latent).array();
+    const double inv2var_if = 0.5 / (theta[kSigmaIf] * theta[kSigmaIf]);
+    for (int s = 0; s < options.ancillary_steps; ++s) {
+      updater.step(engine, theta, latent_column, ssr, inv2var_if, ssr_of, prior, range,
+                   options.target_acceptance, burning_in, collect);
+    }
+    x.col(latent) = latent_column.matrix();
+  };
+
   int kept_index = 0;
   for (int it = 0; it < options.iterations; ++it) {
+    if (it == options.burn_in) {
+      ancillary_k.reset_counts();
+      ancillary_kt.reset_counts();
+      ancillary_z.reset_counts();
+    }
     const bool burning_in = it < options.burn_in;
     const bool hold_theta = it < std::min(options.hold_theta_sweeps, options.burn_in);
 
@@ -450,7 +416,7 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::Wim
 
     // ---- 2-4. hyperparameters ----
     if (!hold_theta) {
-      const Eigen::VectorXd k = x.col(kStiffness), kt = x.col(kTyreStiffness), z = x.col(kLateral);
+      // Each block reads its latent column when it runs: an ancillary step moves that column.
       // K | k, sigma_k ~ N(mean k, sigma_k^2 / N) on the box; then sigma_k | k, K.
       auto mean_and_scale = [&](const Eigen::VectorXd& v, int mean_index, int sd_index, long long& acc,
                                 long long& tries) {
@@ -467,10 +433,18 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::Wim
           tries += 5;
         }
       };
-      mean_and_scale(k, kK, kSigmaK, sk_acc, sk_try);
-      mean_and_scale(kt, kKt, kSigmaKt, skt_acc, skt_try);
+      const bool collect = burning_in && it >= adapt_start;
+      const bool ancillary_sweep = interweave && it % options.ancillary_every == 0;
+      mean_and_scale(x.col(kStiffness), kK, kSigmaK, sk_acc, sk_try);
+      if (ancillary_sweep && options.interweave_stiffness)
+        ancillary_steps(ancillary_k, kStiffness, ssr_with_k, burning_in, collect);
+      mean_and_scale(x.col(kTyreStiffness), kKt, kSigmaKt, skt_acc, skt_try);
+      if (ancillary_sweep && options.interweave_tyre_stiffness)
+        ancillary_steps(ancillary_kt, kTyreStiffness, ssr_with_kt, burning_in, collect);
 
       // (Z, sigma_z): joint random-walk MH; the truncation normaliser breaks conjugacy.
+      const Eigen::VectorXd z =
+          x.col(kLateral);  // a copy: the same sums, bit for bit, as before interweaving
       const double sum_z = z.sum(), sum_z2 = z.squaredNorm();
       double current = log_lateral_density(sum_z, sum_z2, N, theta[kZ], theta[kSigmaZ], range);
       const Eigen::Vector2d step = std::exp(z_log_scale) * z_base_sd;
@@ -502,6 +476,8 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::Wim
           if ((sd.array() > 0.0).all()) z_base_sd = 2.38 / std::sqrt(2.0) * sd;
         }
       }
+      if (ancillary_sweep && options.interweave_lateral)
+        ancillary_steps(ancillary_z, kLateral, ssr_with_z, burning_in, collect);
       report_z_acc += z_acc;
       report_z_tries += options.z_moves_per_sweep;
       if (!burning_in) {
@@ -563,6 +539,12 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::Wim
       skt_try > 0 ? static_cast<double>(skt_acc) / static_cast<double>(skt_try) : 1.0;
   result.sigma_if_acceptance =
       sif_try > 0 ? static_cast<double>(sif_acc) / static_cast<double>(sif_try) : 1.0;
+  auto rate = [](const AncillaryUpdater& u) {
+    return u.tried() > 0 ? static_cast<double>(u.accepted()) / static_cast<double>(u.tried()) : 0.0;
+  };
+  result.ancillary_k_acceptance = rate(ancillary_k);
+  result.ancillary_kt_acceptance = rate(ancillary_kt);
+  result.ancillary_z_acceptance = rate(ancillary_z);
   result.latent_mean.resize(N, kLatentCount);
   result.latent_sd.resize(N, kLatentCount);
   for (int n = 0; n < N; ++n) {

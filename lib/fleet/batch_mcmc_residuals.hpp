@@ -1,0 +1,55 @@
+// The batch MCMC's (batch_mcmc.hpp) view of the data and its one expensive operation: the
+// per-truck sums of squared residuals of candidate latents, through batched, threaded
+// quarter-car calls. Internal to the sampler (namespace detail); split out to keep
+// batch_mcmc.cpp about the chain.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "io/wim_log.hpp"
+#include "site/site.hpp"
+#include "smc/parallel.hpp"
+
+namespace ssrfleet::fleet::detail {
+
+// The observed data in the arrays the sampler works on.
+struct Observations {
+  Eigen::ArrayXd speed_mps;
+  Eigen::ArrayXd sprung_mass_kg;
+  Eigen::ArrayXXd impact_factor;  // sensors x trucks
+  int trucks = 0;
+  int sensors = 0;
+};
+
+// Throws DataError when there are no records or a record does not fit the site.
+Observations gather(const site::Site& site, const std::vector<io::WimRecord>& records);
+
+// Runs the trucks `which` (indices into obs) with the given (k, kt, z) through the site in
+// batches and returns each one's sum of squared residuals against its observations (+inf where
+// the integrator returned something non-finite). The batch is split over the threads of
+// `parallel` at multiples of the integrator's block (vehicle::batch_block_trucks), so the blocks,
+// and with them every truck's bits, are the same whatever the thread count; no random numbers
+// are drawn here.
+class ResidualEvaluator {
+ public:
+  ResidualEvaluator(const site::Site& site, const Observations& obs, int threads)
+      : site_(site), obs_(obs), parallel_(threads) {}
+
+  void evaluate(const std::vector<int>& which, const Eigen::ArrayXd& k, const Eigen::ArrayXd& kt,
+                const Eigen::ArrayXd& z, Eigen::ArrayXd& ssr_out);
+
+  long long calls() const { return calls_; }
+  long long passes() const { return passes_; }
+
+ private:
+  const site::Site& site_;
+  const Observations& obs_;
+  smc::ParallelFor parallel_;
+  long long calls_ = 0;
+  long long passes_ = 0;
+};
+
+}  // namespace ssrfleet::fleet::detail
