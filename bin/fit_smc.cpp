@@ -35,7 +35,7 @@ void FitFlags::add_to(po::options_description& desc) {
   desc.add(smc).add(mcmc);
 }
 
-fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<io::WimRecord>& records,
+fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records::WimRecord>& records,
                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress) {
   fleet::FleetSmc::Options o;
   o.sampler.particles = flags.particles;

@@ -4,9 +4,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "fleet/fleet_model.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "io/atomic_file.hpp"
+#include "model/fleet_model.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::io {

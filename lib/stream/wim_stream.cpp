@@ -8,9 +8,9 @@
 #include <unordered_set>
 
 #include "io/atomic_file.hpp"
-#include "io/binary_io.hpp"
 #include "io/posterior_json.hpp"
 #include "io/wim_log.hpp"
+#include "util/binary_io.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::stream {
@@ -34,7 +34,7 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   if (!fs::exists(checkpoint)) return;
   std::ifstream in(checkpoint, std::ios::binary);
   if (!in) throw IoError("stream: cannot read '" + checkpoint + "'");
-  io::BinaryReader reader(in, checkpoint);
+  BinaryReader reader(in, checkpoint);
   smc_.restore(reader);
   checkpoint_source_ = reader.text("source");
   checkpoint_lines_ = reader.value<std::uint64_t>("lines_consumed");
@@ -51,7 +51,7 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
 
 void WimStream::save_state(const std::string& source, std::size_t lines_consumed) const {
   io::write_file_atomically(path_in(options_.state_dir, "checkpoint.bin"), [&](std::ostream& os) {
-    io::BinaryWriter out(os);
+    BinaryWriter out(os);
     smc_.save(out);
     out.text(source);
     out.value<std::uint64_t>(lines_consumed);
@@ -89,7 +89,7 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
   rejects_bytes_ = fs::file_size(rejects_path);
 
   StreamCounts counts;
-  io::WimRecord record;
+  records::WimRecord record;
   io::Rejection why;
   for (;;) {
     if (stop.load()) break;
