@@ -7,6 +7,7 @@
 #include <thread>
 #include <unordered_set>
 
+#include "fleet/posterior_summary.hpp"
 #include "io/atomic_file.hpp"
 #include "io/posterior_json.hpp"
 #include "io/wim_log.hpp"
@@ -57,7 +58,8 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
     out.value<std::uint64_t>(lines_consumed);
     out.value<std::uint64_t>(rejects_bytes_);
   });
-  io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), smc_.cloud());
+  const fleet::PosteriorCloud cloud = smc_.cloud();
+  io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), cloud, fleet::summarise_cloud(cloud));
 }
 
 void WimStream::report() const {
