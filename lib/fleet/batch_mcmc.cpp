@@ -10,7 +10,7 @@
 #include <boost/random/mersenne_twister.hpp>
 #include <boost/random/normal_distribution.hpp>
 
-#include "fleet/truncated_samplers.hpp"
+#include "model/truncated_samplers.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::fleet {
@@ -36,7 +36,7 @@ struct Observations {
   int sensors = 0;
 };
 
-Observations gather(const site::Site& site, const std::vector<io::WimRecord>& records) {
+Observations gather(const site::Site& site, const std::vector<records::WimRecord>& records) {
   if (records.empty()) throw DataError("batch MCMC: no WIM records to fit");
   Observations obs;
   obs.trucks = static_cast<int>(records.size());
@@ -45,7 +45,7 @@ Observations gather(const site::Site& site, const std::vector<io::WimRecord>& re
   obs.sprung_mass_kg.resize(obs.trucks);
   obs.impact_factor.resize(obs.sensors, obs.trucks);
   for (int n = 0; n < obs.trucks; ++n) {
-    const io::WimRecord& r = records[static_cast<std::size_t>(n)];
+    const records::WimRecord& r = records[static_cast<std::size_t>(n)];
     if (r.impact_factor.size() != obs.sensors) {
       throw DataError("batch MCMC: truck '" + r.truck_id + "' has " + std::to_string(r.impact_factor.size()) +
                       " impact factors but the site has " + std::to_string(obs.sensors) + " sensors");
@@ -231,7 +231,7 @@ double log_posterior_unnormalised(const HyperVector& theta, const Eigen::Ref<con
   return lp;
 }
 
-BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::WimRecord>& records,
+BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
                                const BatchMcmcOptions& options) {
   const Clock::time_point start = Clock::now();
   std::string error;

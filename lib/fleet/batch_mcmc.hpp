@@ -45,8 +45,8 @@
 
 #include <Eigen/Core>
 
-#include "fleet/fleet_model.hpp"
-#include "io/wim_log.hpp"
+#include "model/fleet_model.hpp"
+#include "records/wim_record.hpp"
 #include "site/site.hpp"
 
 namespace ssrfleet::fleet {
@@ -125,7 +125,7 @@ struct BatchMcmcResult {
 // Runs the sampler on WIM records (speed, sprung mass, one impact factor per sensor) at `site`.
 // Throws UsageError on invalid options (the IsValid message) and DataError when a record's
 // impact factors do not match the site's sensors or there are no records.
-BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::WimRecord>& records,
+BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
                                const BatchMcmcOptions& options);
 
 // log of the unnormalised posterior: log prior + sum_n log p(x_n | theta) + log-likelihood from

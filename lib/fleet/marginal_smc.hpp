@@ -11,8 +11,8 @@
 
 #include "fleet/marginal_target.hpp"
 #include "fleet/posterior_cloud.hpp"
-#include "io/binary_io.hpp"
-#include "io/wim_log.hpp"
+#include "util/binary_io.hpp"
+#include "records/wim_record.hpp"
 #include "site/site.hpp"
 #include "smc/engine.hpp"
 
@@ -43,7 +43,7 @@ class MarginalSmc {
 
   // Tempers the record's likelihood in (and rebuilds the tables if the posterior asks for it).
   // Returns the record's stage summary.
-  smc::StageSummary absorb(const io::WimRecord& record);
+  smc::StageSummary absorb(const records::WimRecord& record);
   // MCMC sweeps at φ = 1 (the posterior is unchanged; the cloud's duplicates spread out).
   smc::MhSummary rejuvenate(int sweeps);
 
@@ -56,15 +56,15 @@ class MarginalSmc {
   const std::string& last_rebuild() const { return last_rebuild_; }
 
   // Checkpoint of everything the next truck depends on, so a restored run continues bit-identically.
-  void save(io::BinaryWriter& out) const;
-  void restore(io::BinaryReader& in);
+  void save(BinaryWriter& out) const;
+  void restore(BinaryReader& in);
   // The same in two parts for a stream (O(1) per truck): the particles and settings, and the
   // trucks [begin, end) (id, data, fit, table), which a stream appends to a log. A rebuild of the
   // tables changes every truck's record: table_generation() then moves on, and the whole log must
   // be written again. restore_split() reads the state, then as many truck records as it names.
-  void save_state(io::BinaryWriter& out) const;
-  void save_trucks(io::BinaryWriter& out, std::size_t begin, std::size_t end) const;
-  void restore_split(io::BinaryReader& state, io::BinaryReader& trucks);
+  void save_state(BinaryWriter& out) const;
+  void save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const;
+  void restore_split(BinaryReader& state, BinaryReader& trucks);
   int table_generation() const { return target_.rebuilds(); }
 
   // Observed (speed, mass) pairs that predictions draw from: the most recent ones, so a year-long
