@@ -34,9 +34,10 @@ class MarginalSmc {
       return o;
     }();
     MarginalTarget::Options target;  // its particles follow sampler.particles
-    // Sweeps of rejuvenate() after an offline replay's last truck (fit): each independence sweep
-    // replaces about half the particles by fresh draws (acceptance ~0.55 on the paper's case).
-    int final_sweeps = 3;
+    // Sweeps of rejuvenate() after an offline replay's last truck (fit). Measured on the paper's
+    // 100-truck case (8 seeds): the smallest equivalent ESS of the posterior means (σ_kt) was 96
+    // after 3 sweeps and 289 after 15, at 2.9 s for the whole fit.
+    int final_sweeps = 15;
   };
 
   MarginalSmc(const site::Site& site, Options options);
