@@ -19,9 +19,9 @@
 #include <nlohmann/json.hpp>
 
 #include "discrepancy/diagnose.hpp"
-#include "fleet/fleet_distribution.hpp"
-#include "fleet/model_extension.hpp"
 #include "fleet/simulator.hpp"
+#include "model/fleet_distribution.hpp"
+#include "model/model_extension.hpp"
 #include "site/road_source.hpp"
 
 using namespace ssrfleet;
@@ -38,7 +38,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
   return out;
 }
 
-std::vector<io::WimRecord> make_log(const site::Site& site, const std::string& setting, int trucks, std::uint64_t seed) {
+std::vector<records::WimRecord> make_log(const site::Site& site, const std::string& setting, int trucks, std::uint64_t seed) {
   const auto fleet = fleet::draw_fleet(fleet::FleetDistribution{}, trucks, site.lateral_min_m(), site.lateral_max_m(), seed);
   if (setting == "none") return fleet::simulate_log(site, fleet, 0.02, seed).records;
   const auto e = fleet::parse_extension_setting(setting, site);

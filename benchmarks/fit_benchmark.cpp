@@ -47,15 +47,15 @@
 #include <nlohmann/json.hpp>
 
 #include "fleet/batch_mcmc.hpp"
-#include "fleet/fleet_distribution.hpp"
-#include "fleet/fleet_model.hpp"
 #include "fleet/fleet_smc.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/simulator.hpp"
+#include "model/fleet_distribution.hpp"
+#include "model/fleet_model.hpp"
+#include "seed_scatter.hpp"
 #include "site/road_source.hpp"
 #include "site/site.hpp"
 #include "util/effective_sample_size.hpp"
-#include "seed_scatter.hpp"
 
 using namespace ssrfleet;
 using Clock = std::chrono::steady_clock;
@@ -143,7 +143,7 @@ struct Calibration {
   std::vector<double> us_per_pass;  // one entry per repetition
   double sink = 0.0;
 
-  Calibration(const site::Site& site, const std::vector<io::WimRecord>& records, int trucks, std::uint64_t seed) {
+  Calibration(const site::Site& site, const std::vector<records::WimRecord>& records, int trucks, std::uint64_t seed) {
     std::mt19937_64 engine(seed ^ 0x9e3779b97f4a7c15ULL);
     std::normal_distribution<double> normal;
     batch.resize(trucks);

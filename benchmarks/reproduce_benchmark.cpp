@@ -19,7 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "fleet/fleet_model.hpp"
+#include "model/fleet_model.hpp"
 #include "reproduce/paper_reproduction.hpp"
 
 using namespace ssrfleet;

@@ -14,8 +14,8 @@
 
 #include <boost/math/distributions/chi_squared.hpp>
 
-#include "fleet/fleet_model.hpp"
 #include "fleet/posterior_summary.hpp"
+#include "model/fleet_model.hpp"
 
 namespace ssrfleet::bench {
 

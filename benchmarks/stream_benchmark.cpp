@@ -16,9 +16,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "fleet/fleet_distribution.hpp"
 #include "fleet/fleet_smc.hpp"
 #include "fleet/simulator.hpp"
+#include "model/fleet_distribution.hpp"
 #include "site/road_source.hpp"
 
 using namespace ssrfleet;
@@ -38,7 +38,7 @@ long resident_kb() {
   return -1;
 }
 
-double trucks_per_second(const site::Site& site, const std::vector<io::WimRecord>& records, long particles,
+double trucks_per_second(const site::Site& site, const std::vector<records::WimRecord>& records, long particles,
                          Eigen::Index window) {
   fleet::FleetSmc::Options o;
   o.sampler.particles = particles;
@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
   const site::Site site(site::load_road("AS1"), site::SiteOptions{});
   const auto trucks = fleet::draw_fleet(fleet::FleetDistribution{}, 200, site.lateral_min_m(), site.lateral_max_m(), 1);
   const auto log = fleet::simulate_log(site, trucks, 0.02, 1);
-  std::vector<io::WimRecord> rate_records(log.records.begin(), log.records.begin() + std::min<long>(rate_trucks, 200));
+  std::vector<records::WimRecord> rate_records(log.records.begin(), log.records.begin() + std::min<long>(rate_trucks, 200));
 
   nlohmann::json out;
   out["threads"] = std::thread::hardware_concurrency();
@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   long at_1000 = 0;
   for (long t = 1; t <= memory_trucks; ++t) {
-    io::WimRecord r = log.records[static_cast<std::size_t>((t - 1) % 200)];
+    records::WimRecord r = log.records[static_cast<std::size_t>((t - 1) % 200)];
     r.truck_id = std::to_string(t);  // fresh ids (a prefix would trip GCC 12's -Wrestrict false positive)
     smc.absorb(r);
     if (t == 1000 || t == 10000 || t == 100000 || t == memory_trucks) {

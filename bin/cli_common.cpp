@@ -92,7 +92,7 @@ void write_output(const std::string& path, const std::function<void(std::ostream
   io::write_file_atomically(path, write);
 }
 
-std::vector<io::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags) {
+std::vector<records::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags) {
   int sensors = 0;
   auto records = io::read_wim_log_file(path, site.options().unsprung_mass_kg, &sensors);
   if (sensors != site.sensors()) {

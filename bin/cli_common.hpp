@@ -43,7 +43,7 @@ std::uint64_t parse_seed(const std::string& text, const std::string& option = "-
 
 // Reads a whole WIM log for `site`: DataError (line 1, the first IF column) when its sensor
 // count is not the site's, naming the --sensors value in use.
-std::vector<io::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags);
+std::vector<records::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags);
 
 // Writes through `write` to `path` atomically, or to stdout when path is "-" or empty.
 void write_output(const std::string& path, const std::function<void(std::ostream&)>& write);

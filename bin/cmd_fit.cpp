@@ -9,6 +9,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "fit_methods.hpp"
+#include "fleet/posterior_summary.hpp"
 #include "io/posterior_json.hpp"
 #include "io/wim_log.hpp"
 #include "site/road_source.hpp"
@@ -53,7 +54,7 @@ int run_fit(int argc, const char* const argv[]) {
   const auto start = std::chrono::steady_clock::now();
   const fleet::PosteriorCloud cloud = method == "smc" ? fit_smc(site, records, fit, seed, quiet ? nullptr : &std::cerr)
                                                       : fit_mcmc(site, records, fit, seed, quiet ? nullptr : &std::cerr);
-  write_output(out, [&](std::ostream& os) { os << io::posterior_to_json(cloud).dump(1) << "\n"; });
+  write_output(out, [&](std::ostream& os) { os << io::posterior_to_json(cloud, fleet::summarise_cloud(cloud)).dump(1) << "\n"; });
   if (!quiet) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cerr << "ssrfleet fit: done in " << std::fixed << std::setprecision(1) << s << " s -> " << out << "\n";

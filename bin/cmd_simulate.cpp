@@ -7,10 +7,10 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "fleet/fleet_distribution.hpp"
 #include "fleet/simulator.hpp"
 #include "io/truck_list_csv.hpp"
 #include "io/wim_log.hpp"
+#include "model/fleet_distribution.hpp"
 #include "site/road_source.hpp"
 #include "util/errors.hpp"
 
@@ -66,7 +66,7 @@ int run_simulate(int argc, const char* const argv[]) {
   if (!(noise >= 0.0)) throw UsageError("--noise " + std::to_string(noise) + ": must be >= 0");
 
   const site::Site site(site::load_road(road), site_flags.to_options());
-  std::vector<fleet::Truck> trucks;
+  std::vector<records::Truck> trucks;
   if (is_count(trucks_arg)) {
     const long n = std::stol(trucks_arg);
     if (n < 1 || n > 10'000'000) throw UsageError("--trucks " + trucks_arg + ": must be between 1 and 10000000");

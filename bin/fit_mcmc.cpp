@@ -8,7 +8,7 @@
 
 namespace ssrfleet::cli {
 
-fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<io::WimRecord>& records,
+fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
                                const FitFlags& flags, std::uint64_t seed, std::ostream* progress) {
   fleet::BatchMcmcOptions o;
   if (flags.iterations > 100'000'000 || flags.burn_in > flags.iterations || flags.thin < 1) {

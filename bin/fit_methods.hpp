@@ -39,9 +39,9 @@ struct FitFlags {
   void add_to(boost::program_options::options_description& desc);
 };
 
-fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<io::WimRecord>& records,
+fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records::WimRecord>& records,
                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress);
-fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<io::WimRecord>& records,
+fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
                                const FitFlags& flags, std::uint64_t seed, std::ostream* progress);
 
 }  // namespace ssrfleet::cli

@@ -64,7 +64,7 @@ fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t 
   return o;
 }
 
-fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<io::WimRecord>& records,
+fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records::WimRecord>& records,
                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress) {
   const fleet::OnlineFitOptions o = online_fit_options(flags, seed);
   const int final_sweeps = flags.final_sweeps_given ? flags.final_sweeps : o.default_final_sweeps();

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# The README's test command: installs dependencies, builds, runs the default test suite.
+# The README's test command: installs dependencies, checks the layers of lib/ (cmake/layers.txt),
+# builds, runs the default test suite.
 # The slow statistical checks carry the CTest label "long"; run them with: ctest --test-dir build -L long
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup-debian.sh
+bash scripts/check-layers.sh
 bash scripts/build.sh
 ctest --test-dir build -LE long --output-on-failure -j "$(nproc)"

@@ -12,9 +12,9 @@
 
 #include "discrepancy/diagnose.hpp"
 #include "discrepancy/diagnose_report.hpp"
-#include "fleet/fleet_distribution.hpp"
-#include "fleet/model_extension.hpp"
 #include "fleet/simulator.hpp"
+#include "model/fleet_distribution.hpp"
+#include "model/model_extension.hpp"
 #include "site/road_source.hpp"
 #include "test_support.hpp"
 
@@ -28,7 +28,7 @@ const site::Site& as1() {
 }
 
 // Table 1 fleet on AS1, sigma_IF = 0.02, with the effect `setting` on ("" = none).
-std::vector<io::WimRecord> hidden_effect_log(const std::string& setting, int trucks, std::uint64_t seed) {
+std::vector<records::WimRecord> hidden_effect_log(const std::string& setting, int trucks, std::uint64_t seed) {
   const auto& site = as1();
   const auto fleet = fleet::draw_fleet(fleet::FleetDistribution{}, trucks, site.lateral_min_m(), site.lateral_max_m(), seed);
   if (setting.empty()) return fleet::simulate_log(site, fleet, 0.02, seed).records;

@@ -2,7 +2,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "fleet/fleet_distribution.hpp"
+#include "model/fleet_distribution.hpp"
 #include "util/errors.hpp"
 
 using namespace ssrfleet;
@@ -12,7 +12,7 @@ struct Moments {
   double mean = 0, sd = 0;
 };
 template <class Get>
-Moments moments(const std::vector<fleet::Truck>& t, Get get) {
+Moments moments(const std::vector<records::Truck>& t, Get get) {
   Moments m;
   for (const auto& x : t) m.mean += get(x);
   m.mean /= static_cast<double>(t.size());
@@ -44,15 +44,15 @@ TEST_CASE("a drawn fleet has the Table 1 means and standard deviations within Mo
     CHECK(std::abs(got.sd - expected.sd) < 4.5 * target.sd / std::sqrt(2.0 * (n - 1)));
   };
   check("m2", d.sprung_mass_kg, {d.sprung_mass_kg.mean, d.sprung_mass_kg.sd},
-        moments(trucks, [](const fleet::Truck& t) { return t.sprung_mass_kg; }));
+        moments(trucks, [](const records::Truck& t) { return t.sprung_mass_kg; }));
   check("k", d.stiffness_npm, {d.stiffness_npm.mean, d.stiffness_npm.sd},
-        moments(trucks, [](const fleet::Truck& t) { return t.stiffness_npm; }));
+        moments(trucks, [](const records::Truck& t) { return t.stiffness_npm; }));
   check("kt", d.tyre_stiffness_npm, {d.tyre_stiffness_npm.mean, d.tyre_stiffness_npm.sd},
-        moments(trucks, [](const fleet::Truck& t) { return t.tyre_stiffness_npm; }));
+        moments(trucks, [](const records::Truck& t) { return t.tyre_stiffness_npm; }));
   check("v", d.speed_mps, {d.speed_mps.mean, d.speed_mps.sd},
-        moments(trucks, [](const fleet::Truck& t) { return t.speed_mps; }));
+        moments(trucks, [](const records::Truck& t) { return t.speed_mps; }));
   check("z", d.lateral_m, truncated_normal_moments(1.5, 0.5, 0.0, 5.0),
-        moments(trucks, [](const fleet::Truck& t) { return t.lateral_m; }));
+        moments(trucks, [](const records::Truck& t) { return t.lateral_m; }));
 }
 
 TEST_CASE("lateral positions are truncated to the road surface and the draw is reproducible", "[fleet]") {

@@ -6,11 +6,11 @@
 #include <catch2/catch.hpp>
 
 #include "fleet/batch_mcmc.hpp"
-#include "fleet/fleet_distribution.hpp"
+#include "model/fleet_distribution.hpp"
 #include "fleet/marginal_smc.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/simulator.hpp"
-#include "io/binary_io.hpp"
+#include "util/binary_io.hpp"
 #include "site/road_source.hpp"
 #include "util/effective_sample_size.hpp"
 #include "util/errors.hpp"
@@ -38,7 +38,7 @@ fleet::MarginalSmc::Options options(Eigen::Index particles, int threads, std::ui
 
 std::string bytes_of(const fleet::MarginalSmc& smc) {
   std::ostringstream os;
-  io::BinaryWriter w(os);
+  BinaryWriter w(os);
   smc.save(w);
   return os.str();
 }
@@ -118,7 +118,7 @@ TEST_CASE("a marginal-core checkpoint resumes bit-identically, and an old or cut
   fleet::MarginalSmc resumed(c.site, options(64, 1, 9));  // another thread count changes nothing
   {
     std::istringstream is(saved);
-    io::BinaryReader in(is, "checkpoint.bin");
+    BinaryReader in(is, "checkpoint.bin");
     resumed.restore(in);
   }
   for (std::size_t t = 7; t < c.log.records.size(); ++t) resumed.absorb(c.log.records[t]);
@@ -129,13 +129,13 @@ TEST_CASE("a marginal-core checkpoint resumes bit-identically, and an old or cut
   const std::uint32_t v1 = 1;
   std::memcpy(old.data() + sizeof(std::uint64_t), &v1, sizeof v1);
   std::istringstream is(old);
-  io::BinaryReader in(is, "old/checkpoint.bin");
+  BinaryReader in(is, "old/checkpoint.bin");
   fleet::MarginalSmc again(c.site, options(64, 2, 9));
   CHECK_THROWS_WITH(again.restore(in), Catch::Contains("old/checkpoint.bin") && Catch::Contains("version 1"));
 
   // A truncated one: a clear error naming the file, never a half-restored state.
   std::istringstream cut(saved.substr(0, saved.size() / 2));
-  io::BinaryReader cut_in(cut, "cut/checkpoint.bin");
+  BinaryReader cut_in(cut, "cut/checkpoint.bin");
   fleet::MarginalSmc third(c.site, options(64, 2, 9));
   CHECK_THROWS_WITH(third.restore(cut_in), Catch::Contains("cut/checkpoint.bin"));
 }

@@ -19,9 +19,9 @@
 
 #include "fleet/batch_mcmc.hpp"
 #include "fleet/batch_mcmc_interweave.hpp"
-#include "fleet/fleet_distribution.hpp"
+#include "model/fleet_distribution.hpp"
 #include "fleet/simulator.hpp"
-#include "fleet/truncated_samplers.hpp"
+#include "model/truncated_samplers.hpp"
 #include "site/road_source.hpp"
 #include "site/site.hpp"
 #include "util/effective_sample_size.hpp"

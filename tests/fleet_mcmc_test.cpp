@@ -11,10 +11,10 @@
 #include <catch2/catch.hpp>
 
 #include "fleet/batch_mcmc.hpp"
-#include "fleet/fleet_distribution.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/simulator.hpp"
-#include "fleet/truncated_samplers.hpp"
+#include "model/fleet_distribution.hpp"
+#include "model/truncated_samplers.hpp"
 #include "site/road_source.hpp"
 #include "site/site.hpp"
 #include "util/effective_sample_size.hpp"
@@ -57,7 +57,7 @@ double sd_of(const Eigen::VectorXd& v) {
 
 // Simulated data on AS1 (the paper's §4 set-up): Table 1 fleet, sigma_IF noise.
 struct Simulated {
-  std::vector<fleet::Truck> trucks;
+  std::vector<records::Truck> trucks;
   fleet::SimulatedLog log;
 };
 Simulated simulate(const site::Site& site, int trucks, double sigma_if, std::uint64_t seed) {
@@ -68,7 +68,7 @@ Simulated simulate(const site::Site& site, int trucks, double sigma_if, std::uin
   return s;
 }
 
-Eigen::MatrixXd true_latents(const std::vector<fleet::Truck>& trucks) {
+Eigen::MatrixXd true_latents(const std::vector<records::Truck>& trucks) {
   Eigen::MatrixXd x(static_cast<Eigen::Index>(trucks.size()), 3);
   for (std::size_t i = 0; i < trucks.size(); ++i) {
     const auto n = static_cast<Eigen::Index>(i);
@@ -281,7 +281,7 @@ TEST_CASE("run_batch_mcmc refuses bad options and mismatched records before simu
   const site::Site site(site::load_road("AS1"), site::SiteOptions{});
   fleet::BatchMcmcOptions o;
   o.iterations = 0;
-  std::vector<io::WimRecord> records(1);
+  std::vector<records::WimRecord> records(1);
   records[0].truck_id = "T1";
   records[0].speed_mps = 20.0;
   records[0].sprung_mass_kg = 4000.0;

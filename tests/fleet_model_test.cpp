@@ -4,7 +4,7 @@
 #include <boost/math/quadrature/gauss_kronrod.hpp>
 #include <catch2/catch.hpp>
 
-#include "fleet/fleet_model.hpp"
+#include "model/fleet_model.hpp"
 
 using namespace ssrfleet;
 

@@ -2,8 +2,8 @@
 
 #include <catch2/catch.hpp>
 
-#include "fleet/fleet_distribution.hpp"
 #include "fleet/simulator.hpp"
+#include "model/fleet_distribution.hpp"
 #include "road/surface_presets.hpp"
 #include "site/road_source.hpp"
 #include "site/site.hpp"

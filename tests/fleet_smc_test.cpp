@@ -4,13 +4,13 @@
 #include <catch2/catch.hpp>
 
 #include "fleet/batch_mcmc.hpp"
-#include "fleet/fleet_distribution.hpp"
 #include "fleet/fleet_smc.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/simulator.hpp"
-#include "io/binary_io.hpp"
+#include "model/fleet_distribution.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/road_source.hpp"
+#include "util/binary_io.hpp"
 #include "util/errors.hpp"
 
 using namespace ssrfleet;
@@ -20,7 +20,7 @@ const fleet::HyperVector kTruth{500e3, 50e3, 1950e3, 195e3, 1.5, 0.5, 0.02};
 
 struct Case {
   site::Site site{site::load_road("AS1"), site::SiteOptions{}};
-  std::vector<fleet::Truck> trucks;
+  std::vector<records::Truck> trucks;
   fleet::SimulatedLog log;
   Case(int n, std::uint64_t seed) {
     trucks = fleet::draw_fleet(fleet::FleetDistribution{}, n, site.lateral_min_m(), site.lateral_max_m(), seed);
@@ -217,10 +217,10 @@ TEST_CASE("a checkpoint restored into a fresh sampler continues bit-identically 
     fleet::FleetSmc first(c.site, options);
     for (int t = 0; t < 8; ++t) first.absorb(c.log.records[static_cast<std::size_t>(t)]);
     std::stringstream checkpoint;
-    io::BinaryWriter writer(checkpoint);
+    BinaryWriter writer(checkpoint);
     first.save(writer);
     fleet::FleetSmc resumed(c.site, options);
-    io::BinaryReader reader(checkpoint, "checkpoint");
+    BinaryReader reader(checkpoint, "checkpoint");
     resumed.restore(reader);
     for (std::size_t t = 8; t < c.log.records.size(); ++t) resumed.absorb(c.log.records[t]);
 
@@ -238,19 +238,19 @@ TEST_CASE("a checkpoint from another seed or a corrupt one is refused", "[fleet]
   fleet::FleetSmc a(c.site, smc_options(32, 1, 1));
   for (const auto& r : c.log.records) a.absorb(r);
   std::stringstream checkpoint;
-  io::BinaryWriter writer(checkpoint);
+  BinaryWriter writer(checkpoint);
   a.save(writer);
   const std::string bytes = checkpoint.str();
   {
     fleet::FleetSmc other_seed(c.site, smc_options(32, 1, 2));
     std::stringstream in(bytes);
-    io::BinaryReader reader(in, "ck.bin");
+    BinaryReader reader(in, "ck.bin");
     CHECK_THROWS_WITH(other_seed.restore(reader), Catch::Contains("another seed"));
   }
   {
     fleet::FleetSmc same(c.site, smc_options(32, 1, 1));
     std::stringstream in(bytes.substr(0, bytes.size() / 2));  // truncated
-    io::BinaryReader reader(in, "ck.bin");
+    BinaryReader reader(in, "ck.bin");
     CHECK_THROWS_WITH(same.restore(reader), Catch::Contains("ck.bin") && Catch::Contains("ends early"));
   }
 }

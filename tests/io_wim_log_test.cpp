@@ -4,8 +4,8 @@
 
 #include "io/csv_reader.hpp"
 #include "io/wim_log.hpp"
-#include "util/errors.hpp"
 #include "test_support.hpp"
+#include "util/errors.hpp"
 
 using namespace ssrfleet;
 
@@ -13,7 +13,7 @@ namespace {
 const char* kHeader = "truck_id,time_s,speed_mps,sprung_mass_kg,if_1,if_2,if_3\n";
 
 struct ReadAll {
-  std::vector<io::WimRecord> records;
+  std::vector<records::WimRecord> records;
   std::vector<io::Rejection> rejections;
 };
 
@@ -21,7 +21,7 @@ ReadAll read_all(const std::string& text) {
   std::istringstream in(text);
   io::WimLogReader reader(in, "log.csv", 420.0);
   ReadAll all;
-  io::WimRecord r;
+  records::WimRecord r;
   io::Rejection why;
   for (;;) {
     const auto s = reader.next(r, why);
@@ -65,7 +65,7 @@ TEST_CASE("numbers must be whole finite fields", "[io]") {
 }
 
 TEST_CASE("a WIM log round-trips bit-exactly through write and read", "[io]") {
-  std::vector<io::WimRecord> records(2);
+  std::vector<records::WimRecord> records(2);
   records[0].truck_id = "A";
   records[0].speed_mps = 23.43000000000001;
   records[0].sprung_mass_kg = 4450.123456789;

@@ -9,11 +9,11 @@
 #include <boost/random/uniform_01.hpp>
 #include <catch2/catch.hpp>
 
-#include "fleet/extended_forward.hpp"
-#include "fleet/fleet_distribution.hpp"
-#include "fleet/fleet_model.hpp"
-#include "fleet/model_extension.hpp"
 #include "fleet/simulator.hpp"
+#include "model/extended_forward.hpp"
+#include "model/fleet_distribution.hpp"
+#include "model/fleet_model.hpp"
+#include "model/model_extension.hpp"
 #include "site/road_source.hpp"
 #include "site/site.hpp"
 #include "util/errors.hpp"
@@ -21,13 +21,13 @@
 using namespace ssrfleet;
 
 namespace {
-std::vector<fleet::Truck> some_trucks(const site::Site& site, int n = 24) {
+std::vector<records::Truck> some_trucks(const site::Site& site, int n = 24) {
   return fleet::draw_fleet(fleet::FleetDistribution{}, n, site.lateral_min_m(), site.lateral_max_m(), 7);
 }
 
 // Largest |difference| between the extension's simulation and the plain model on `other`.
 double worst_difference(const site::Site& base, const std::string& setting, const site::Site& other,
-                        const std::vector<fleet::Truck>& trucks) {
+                        const std::vector<records::Truck>& trucks) {
   const auto effect = fleet::parse_extension_setting(setting, base);
   const auto with_effect = fleet::simulate_log(base, trucks, 0.0, 1, *effect.extension, effect.psi);
   const auto reference = fleet::simulate_log(other, trucks, 0.0, 1);

@@ -6,7 +6,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "fleet/fleet_distribution.hpp"
+#include "model/fleet_distribution.hpp"
 #include "fleet/simulator.hpp"
 #include "model/fleet_marginal.hpp"
 #include "model/truck_table.hpp"
@@ -19,7 +19,7 @@ namespace {
 
 // log ℓ_i(θ) by a 33 x 33 rectangle rule over ±7 sd of the (k, k_t) integrand (error ~e^-90 for
 // a smooth integrand), the z integral by reference_log_z_integral at every node.
-double brute_force_log_likelihood(const site::Site& site, const io::WimRecord& r, const model::TruckFit& f,
+double brute_force_log_likelihood(const site::Site& site, const records::WimRecord& r, const model::TruckFit& f,
                                   const fleet::HyperVector& th) {
   const double sk = th[fleet::kSigmaK], skt = th[fleet::kSigmaKt];
   const double lk = f.stiffness_sd_per_sigma * th[fleet::kSigmaIf], lkt = f.tyre_stiffness_sd_per_sigma * th[fleet::kSigmaIf];

@@ -6,9 +6,9 @@
 
 #include <catch2/catch.hpp>
 
-#include "fleet/fleet_distribution.hpp"
-#include "fleet/fleet_model.hpp"
 #include "fleet/simulator.hpp"
+#include "model/fleet_distribution.hpp"
+#include "model/fleet_model.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/road_source.hpp"
 #include "site/site.hpp"
@@ -17,7 +17,7 @@ using namespace ssrfleet;
 
 namespace {
 // A posterior that is a point mass at the Table 1 fleet, with `pool` as the observed trucks.
-fleet::PosteriorCloud point_mass(const fleet::FleetDistribution& d, const std::vector<fleet::Truck>& pool) {
+fleet::PosteriorCloud point_mass(const fleet::FleetDistribution& d, const std::vector<records::Truck>& pool) {
   fleet::PosteriorCloud cloud;
   cloud.method = "smc";
   Eigen::VectorXd th(fleet::kHyperCount);
@@ -41,7 +41,7 @@ struct KnownTheta {
   static constexpr int observed_trucks = 100, reference_trucks = 20000;
   site::Site site{site::load_road("AS3"), site::SiteOptions{}};
   fleet::FleetDistribution table1;
-  std::vector<fleet::Truck> observed;
+  std::vector<records::Truck> observed;
   fleet::SimulatedLog reference;
   fleet::PosteriorCloud cloud;
 

@@ -11,7 +11,7 @@
 
 #include "discrepancy/posterior_draws.hpp"
 #include "fleet/fleet_smc.hpp"
-#include "fleet/model_extension.hpp"
+#include "model/model_extension.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::discrepancy {
@@ -28,7 +28,7 @@ struct Fitted {
   ModelFit fit;
 };
 
-Fitted fit_model(const site::Site& site, const std::vector<io::WimRecord>& records, std::size_t heldout_from,
+Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& records, std::size_t heldout_from,
                  std::unique_ptr<fleet::ModelExtension> extension, const DiagnoseOptions& o) {
   Fitted f;
   f.extension = std::move(extension);
@@ -101,7 +101,7 @@ void DiagnoseOptions::validate() const {
   if (replicates < 100) throw UsageError("diagnose: replicates must be at least 100");
 }
 
-DiagnoseResult diagnose(const site::Site& site, const std::vector<io::WimRecord>& records, const DiagnoseOptions& o) {
+DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRecord>& records, const DiagnoseOptions& o) {
   o.validate();
   const auto start = Clock::now();
   const std::size_t n = records.size();

@@ -25,9 +25,9 @@
 #include <vector>
 
 #include "discrepancy/posterior_checks.hpp"
-#include "fleet/fleet_model.hpp"
 #include "fleet/posterior_summary.hpp"
-#include "io/wim_log.hpp"
+#include "model/fleet_model.hpp"
+#include "records/wim_record.hpp"
 #include "site/site.hpp"
 
 namespace ssrfleet::discrepancy {
@@ -93,6 +93,6 @@ struct DiagnoseResult {
 };
 
 // records: the WIM log, in arrival order; its sensor count must be the site's (DataError).
-DiagnoseResult diagnose(const site::Site& site, const std::vector<io::WimRecord>& records, const DiagnoseOptions& options);
+DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRecord>& records, const DiagnoseOptions& options);
 
 }  // namespace ssrfleet::discrepancy

@@ -30,7 +30,7 @@
 
 #include <Eigen/Core>
 
-#include "fleet/model_extension.hpp"
+#include "model/model_extension.hpp"
 
 namespace ssrfleet::discrepancy {
 

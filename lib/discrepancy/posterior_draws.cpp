@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "fleet/extended_forward.hpp"
+#include "model/extended_forward.hpp"
 #include "smc/parallel.hpp"
 #include "smc/resampling.hpp"
 #include "util/errors.hpp"

@@ -13,7 +13,9 @@
 
 #include "fleet/batch_mcmc_interweave.hpp"
 #include "fleet/batch_mcmc_residuals.hpp"
-#include "fleet/truncated_samplers.hpp"
+#include "model/truck_table.hpp"
+#include "smc/engine.hpp"
+#include "model/truncated_samplers.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::fleet {
@@ -160,7 +162,7 @@ double log_posterior_unnormalised(const HyperVector& theta, const Eigen::Ref<con
   return lp;
 }
 
-BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::WimRecord>& records,
+BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
                                const BatchMcmcOptions& options) {
   const Clock::time_point start = Clock::now();
   std::string error;
@@ -213,6 +215,25 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::Wim
     }
     evaluator.evaluate(all, x.col(kStiffness).array(), x.col(kTyreStiffness).array(), x.col(kLateral).array(),
                        ssr);
+  } else if (options.init == BatchMcmcOptions::Init::kBestFit) {
+    // Every truck at its own best fit (independent per truck, so the threads change no bit).
+    model::TruckTableOptions search;
+    search.k_start_npm = k0;
+    search.kt_start_npm = kt0;
+    const smc::ParallelFor fits(options.threads > 0 ? options.threads : smc::TemperedSampler::Options::default_threads());
+    std::vector<int> fit_passes(static_cast<std::size_t>(N), 0);
+    fits(N, [&](Eigen::Index begin, Eigen::Index end) {
+      for (Eigen::Index n = begin; n < end; ++n) {
+        const auto& r = records[static_cast<std::size_t>(n)];
+        const model::TruckFit f = model::fit_truck(site, r.speed_mps, r.sprung_mass_kg, r.impact_factor, search);
+        x(n, kStiffness) = f.stiffness_npm;
+        x(n, kTyreStiffness) = f.tyre_stiffness_npm;
+        x(n, kLateral) = std::clamp(f.lateral_m, range.lo_m, range.hi_m);
+        fit_passes[static_cast<std::size_t>(n)] = f.passes;
+      }
+    });
+    for (int p : fit_passes) result.integrator_passes += p;
+    evaluator.evaluate(all, x.col(kStiffness).array(), x.col(kTyreStiffness).array(), x.col(kLateral).array(), ssr);
   } else {
     // Coarse grid search over z with k, kt at generic values (see the header).
     std::vector<double> grid;
@@ -252,10 +273,12 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<io::Wim
     theta = *options.initial_theta;
   } else {
     const Eigen::VectorXd z = x.col(kLateral);
-    theta[kK] = clip_to_box(kK, options.initial_latents ? x.col(kStiffness).mean() : k0);
-    theta[kKt] = clip_to_box(kKt, options.initial_latents ? x.col(kTyreStiffness).mean() : kt0);
-    const double sk = options.initial_latents && N > 2 ? column_sd(x.col(kStiffness)) : 0.2 * theta[kK];
-    const double skt = options.initial_latents && N > 2 ? column_sd(x.col(kTyreStiffness)) : 0.2 * theta[kKt];
+    // Latents that come from the data (given, or each truck's best fit) set θ's start too.
+    const bool from_data = options.initial_latents || options.init == BatchMcmcOptions::Init::kBestFit;
+    theta[kK] = clip_to_box(kK, from_data ? x.col(kStiffness).mean() : k0);
+    theta[kKt] = clip_to_box(kKt, from_data ? x.col(kTyreStiffness).mean() : kt0);
+    const double sk = from_data && N > 2 ? column_sd(x.col(kStiffness)) : 0.2 * theta[kK];
+    const double skt = from_data && N > 2 ? column_sd(x.col(kTyreStiffness)) : 0.2 * theta[kKt];
     theta[kSigmaK] = clip_to_box(kSigmaK, sk);
     theta[kSigmaKt] = clip_to_box(kSigmaKt, skt);
     theta[kZ] = clip_to_box(kZ, z.mean());

@@ -9,7 +9,7 @@
 namespace ssrfleet::fleet {
 
 PosteriorCloud to_posterior_cloud(const BatchMcmcResult& result, const site::Site& site,
-                                  const std::vector<io::WimRecord>& records) {
+                                  const std::vector<records::WimRecord>& records) {
   PosteriorCloud c;
   c.method = "mcmc";
   c.theta = result.theta_draws.transpose();

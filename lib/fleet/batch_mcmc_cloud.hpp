@@ -7,7 +7,7 @@
 
 #include "fleet/batch_mcmc.hpp"
 #include "fleet/posterior_cloud.hpp"
-#include "io/wim_log.hpp"
+#include "records/wim_record.hpp"
 #include "site/site.hpp"
 
 namespace ssrfleet::fleet {
@@ -16,6 +16,6 @@ namespace ssrfleet::fleet {
 // over the seven hyperparameters (the figure that limits every summary); log_evidence NaN (the
 // batch sampler does not estimate it).
 PosteriorCloud to_posterior_cloud(const BatchMcmcResult& result, const site::Site& site,
-                                  const std::vector<io::WimRecord>& records);
+                                  const std::vector<records::WimRecord>& records);
 
 }  // namespace ssrfleet::fleet

@@ -6,7 +6,7 @@
 
 #include <boost/random/normal_distribution.hpp>
 
-#include "fleet/truncated_samplers.hpp"
+#include "model/truncated_samplers.hpp"
 #include "util/check.hpp"
 
 namespace ssrfleet::fleet {

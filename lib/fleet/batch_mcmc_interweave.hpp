@@ -36,7 +36,7 @@
 #include <Eigen/Core>
 #include <boost/random/mersenne_twister.hpp>
 
-#include "fleet/fleet_model.hpp"
+#include "model/fleet_model.hpp"
 
 namespace ssrfleet::fleet {
 

@@ -9,7 +9,7 @@
 
 namespace ssrfleet::fleet::detail {
 
-Observations gather(const site::Site& site, const std::vector<io::WimRecord>& records) {
+Observations gather(const site::Site& site, const std::vector<records::WimRecord>& records) {
   if (records.empty()) throw DataError("batch MCMC: no WIM records to fit");
   Observations obs;
   obs.trucks = static_cast<int>(records.size());
@@ -18,7 +18,7 @@ Observations gather(const site::Site& site, const std::vector<io::WimRecord>& re
   obs.sprung_mass_kg.resize(obs.trucks);
   obs.impact_factor.resize(obs.sensors, obs.trucks);
   for (int n = 0; n < obs.trucks; ++n) {
-    const io::WimRecord& r = records[static_cast<std::size_t>(n)];
+    const records::WimRecord& r = records[static_cast<std::size_t>(n)];
     if (r.impact_factor.size() != obs.sensors) {
       throw DataError("batch MCMC: truck '" + r.truck_id + "' has " + std::to_string(r.impact_factor.size()) +
                       " impact factors but the site has " + std::to_string(obs.sensors) + " sensors");

@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 
-#include "io/wim_log.hpp"
+#include "records/wim_record.hpp"
 #include "site/site.hpp"
 #include "smc/parallel.hpp"
 
@@ -25,7 +25,7 @@ struct Observations {
 };
 
 // Throws DataError when there are no records or a record does not fit the site.
-Observations gather(const site::Site& site, const std::vector<io::WimRecord>& records);
+Observations gather(const site::Site& site, const std::vector<records::WimRecord>& records);
 
 // Runs the trucks `which` (indices into obs) with the given (k, kt, z) through the site in
 // batches and returns each one's sum of squared residuals against its observations (+inf where

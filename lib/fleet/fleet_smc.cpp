@@ -31,7 +31,7 @@ FleetSmc::FleetSmc(const site::Site& site, Options options)
   target_.initialise(sampler_.model_rngs().child(kInitialDraws));
 }
 
-const smc::StageSummary& FleetSmc::absorb(const io::WimRecord& record) {
+const smc::StageSummary& FleetSmc::absorb(const records::WimRecord& record) {
   target_.add_truck(record, sampler_.model_rngs().child(kNewTruckDraws), parallel_);
   truck_ids_.push_back(record.truck_id);
   if (window_ > 0 && truck_ids_.size() > FleetTarget::kPredictionPool) truck_ids_.pop_front();
@@ -48,7 +48,7 @@ constexpr std::uint64_t kCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
 constexpr std::uint32_t kCheckpointVersion = 1;
 }  // namespace
 
-void FleetSmc::save(io::BinaryWriter& out) const {
+void FleetSmc::save(BinaryWriter& out) const {
   out.value(kCheckpointMagic);
   out.value(kCheckpointVersion);
   out.text(site_.fingerprint());
@@ -62,7 +62,7 @@ void FleetSmc::save(io::BinaryWriter& out) const {
   target_.save(out);
 }
 
-void FleetSmc::restore(io::BinaryReader& in) {
+void FleetSmc::restore(BinaryReader& in) {
   if (in.value<std::uint64_t>("magic") != kCheckpointMagic) in.fail("magic", "not an ssrfleet checkpoint");
   if (in.value<std::uint32_t>("version") != kCheckpointVersion) in.fail("version", "unsupported checkpoint version");
   if (in.text("site") != site_.fingerprint()) {

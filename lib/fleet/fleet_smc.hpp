@@ -7,13 +7,12 @@
 #include <string>
 #include <vector>
 
-#include "io/binary_io.hpp"
-
 #include "fleet/fleet_target.hpp"
 #include "fleet/posterior_cloud.hpp"
-#include "io/wim_log.hpp"
+#include "records/wim_record.hpp"
 #include "site/site.hpp"
 #include "smc/engine.hpp"
+#include "util/binary_io.hpp"
 
 namespace ssrfleet::fleet {
 
@@ -48,7 +47,7 @@ class FleetSmc {
 
   // Extends every particle with the record's truck and tempers its likelihood in. Throws
   // NumericalError naming the truck (and the step) if the weights degenerate or a density is NaN.
-  const smc::StageSummary& absorb(const io::WimRecord& record);
+  const smc::StageSummary& absorb(const records::WimRecord& record);
 
   // MCMC sweeps at φ = 1 over every truck's latents and θ (FleetTarget::rejuvenate), for the end
   // of an offline replay: the posterior is unchanged, the seed-to-seed error of its summaries
@@ -70,8 +69,8 @@ class FleetSmc {
   // Checkpoint of everything the next truck depends on (sampler state, particles, data), so a
   // run restored from it continues bit-identically. restore() expects an object built with the
   // same site and options; a checkpoint of another site or particle count is a DataError.
-  void save(io::BinaryWriter& out) const;
-  void restore(io::BinaryReader& in);
+  void save(BinaryWriter& out) const;
+  void restore(BinaryReader& in);
 
  private:
   const site::Site& site_;

@@ -7,8 +7,8 @@
 #include <Eigen/Cholesky>
 #include <string>
 
-#include "fleet/extended_forward.hpp"
-#include "fleet/truncated_samplers.hpp"
+#include "model/extended_forward.hpp"
+#include "model/truncated_samplers.hpp"
 #include "smc/mh_kernel.hpp"
 #include "smc/rng.hpp"
 #include "util/errors.hpp"
@@ -88,7 +88,7 @@ void FleetTarget::initialise(const smc::RngFactory& rngs) {
   older_scale_.clear();
 }
 
-void FleetTarget::add_truck(const io::WimRecord& record, const smc::RngFactory& rngs,
+void FleetTarget::add_truck(const records::WimRecord& record, const smc::RngFactory& rngs,
                             const smc::ParallelFor& parallel) {
   if (record.impact_factor.size() != sensors_) {
     throw DataError("truck '" + record.truck_id + "' has " + std::to_string(record.impact_factor.size()) +
@@ -439,7 +439,7 @@ void FleetTarget::theta_moves(double phi, const smc::RngFactory& rngs, const smc
   });
 }
 
-void FleetTarget::save(io::BinaryWriter& out) const {
+void FleetTarget::save(BinaryWriter& out) const {
   out.value<std::int64_t>(options_.particles);
   out.value<std::int32_t>(sensors_);
   out.value<std::int64_t>(options_.window);
@@ -468,7 +468,7 @@ void FleetTarget::save(io::BinaryWriter& out) const {
   }
 }
 
-void FleetTarget::load(io::BinaryReader& in) {
+void FleetTarget::load(BinaryReader& in) {
   const Eigen::Index P = options_.particles;
   if (in.value<std::int64_t>("particles") != P) in.fail("particles", "saved with another particle count");
   if (in.value<std::int32_t>("sensors") != sensors_) in.fail("sensors", "saved for another sensor count");

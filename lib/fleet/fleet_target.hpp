@@ -25,12 +25,12 @@
 
 #include <Eigen/Core>
 
-#include "fleet/fleet_model.hpp"
-#include "fleet/model_extension.hpp"
-#include "io/binary_io.hpp"
-#include "io/wim_log.hpp"
+#include "model/fleet_model.hpp"
+#include "model/model_extension.hpp"
+#include "records/wim_record.hpp"
 #include "site/site.hpp"
 #include "smc/target.hpp"
+#include "util/binary_io.hpp"
 
 namespace ssrfleet::fleet {
 
@@ -70,7 +70,7 @@ class FleetTarget final : public smc::TemperedModel {
   void initialise(const smc::RngFactory& rngs);
   // Extends every particle with the truck's latents drawn from p(x | θ) and makes its
   // likelihood the increment of the next stage. The record's sensor count must match the site.
-  void add_truck(const io::WimRecord& record, const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
+  void add_truck(const records::WimRecord& record, const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
 
   Eigen::Index trucks() const { return total_trucks_; }              // absorbed so far
   Eigen::Index kept_trucks() const { return static_cast<Eigen::Index>(speed_mps_.size()); }  // with latents
@@ -100,8 +100,8 @@ class FleetTarget final : public smc::TemperedModel {
 
   // Checkpoint: the particles and the data absorbed, exactly (binary_io.hpp). load() expects a
   // target built with the same site and options; DataError if the saved one does not fit.
-  void save(io::BinaryWriter& out) const;
-  void load(io::BinaryReader& in);
+  void save(BinaryWriter& out) const;
+  void load(BinaryReader& in);
 
   // smc::TemperedModel
   Eigen::Index particles() const override { return options_.particles; }

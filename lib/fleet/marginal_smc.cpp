@@ -23,7 +23,7 @@ MarginalSmc::MarginalSmc(const site::Site& site, Options options)
   target_.initialise(sampler_.model_rngs().child(kInitialDraws));
 }
 
-smc::StageSummary MarginalSmc::absorb(const io::WimRecord& record) {
+smc::StageSummary MarginalSmc::absorb(const records::WimRecord& record) {
   target_.add_truck(record.speed_mps, record.sprung_mass_kg, record.impact_factor, sampler_.weights(), parallel_);
   truck_ids_.push_back(record.truck_id);
   smc::StageSummary truck = sampler_.run_stage(
@@ -74,14 +74,14 @@ constexpr std::uint64_t kCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
 constexpr std::uint32_t kCheckpointVersion = 2;
 }  // namespace
 
-void MarginalSmc::save(io::BinaryWriter& out) const {
+void MarginalSmc::save(BinaryWriter& out) const {
   save_state(out);
   save_trucks(out, 0, truck_ids_.size());
 }
 
-void MarginalSmc::restore(io::BinaryReader& in) { restore_split(in, in); }
+void MarginalSmc::restore(BinaryReader& in) { restore_split(in, in); }
 
-void MarginalSmc::save_state(io::BinaryWriter& out) const {
+void MarginalSmc::save_state(BinaryWriter& out) const {
   out.value(kCheckpointMagic);
   out.value(kCheckpointVersion);
   out.text(site_.fingerprint());
@@ -94,14 +94,14 @@ void MarginalSmc::save_state(io::BinaryWriter& out) const {
   target_.save_particles(out);
 }
 
-void MarginalSmc::save_trucks(io::BinaryWriter& out, std::size_t begin, std::size_t end) const {
+void MarginalSmc::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const {
   for (std::size_t i = begin; i < end; ++i) {
     out.text(truck_ids_[i]);
     target_.save_trucks(out, i, i + 1);
   }
 }
 
-void MarginalSmc::restore_split(io::BinaryReader& in, io::BinaryReader& trucks) {
+void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {
   if (in.value<std::uint64_t>("magic") != kCheckpointMagic) in.fail("magic", "not an ssrfleet checkpoint");
   const auto version = in.value<std::uint32_t>("version");
   if (version == 1) {

@@ -356,12 +356,12 @@ constexpr std::uint32_t kVersion = 1;
 
 }  // namespace
 
-void MarginalTarget::save(io::BinaryWriter& out) const {
+void MarginalTarget::save(BinaryWriter& out) const {
   save_particles(out);
   save_trucks(out, 0, static_cast<std::size_t>(trucks()));
 }
 
-void MarginalTarget::save_particles(io::BinaryWriter& out) const {
+void MarginalTarget::save_particles(BinaryWriter& out) const {
   if (mode_ != Mode::kIdle) throw std::logic_error("MarginalTarget::save: mid-stage");
   out.value(kMagic);
   out.value(kVersion);
@@ -379,7 +379,7 @@ void MarginalTarget::save_particles(io::BinaryWriter& out) const {
   out.value<std::uint64_t>(speed_mps_.size());
 }
 
-void MarginalTarget::save_trucks(io::BinaryWriter& out, std::size_t begin, std::size_t end) const {
+void MarginalTarget::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const {
   for (std::size_t i = begin; i < end; ++i) {
     out.value(speed_mps_[i]);
     out.value(sprung_mass_kg_[i]);
@@ -401,7 +401,7 @@ void MarginalTarget::save_trucks(io::BinaryWriter& out, std::size_t begin, std::
   }
 }
 
-std::uint64_t MarginalTarget::load_particles(io::BinaryReader& in) {
+std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   if (in.value<std::uint64_t>("marginal target") != kMagic) in.fail("marginal target", "not a marginal-core state");
   const auto version = in.value<std::uint32_t>("marginal target version");
   if (version != kVersion) {
@@ -437,7 +437,7 @@ std::uint64_t MarginalTarget::load_particles(io::BinaryReader& in) {
   return n;
 }
 
-void MarginalTarget::load_trucks(io::BinaryReader& in, std::uint64_t count) {
+void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
   for (std::uint64_t i = 0; i < count; ++i) {
     speed_mps_.push_back(in.value<double>("truck speed"));
     sprung_mass_kg_.push_back(in.value<double>("truck mass"));
@@ -465,7 +465,7 @@ void MarginalTarget::load_trucks(io::BinaryReader& in, std::uint64_t count) {
   }
 }
 
-void MarginalTarget::load(io::BinaryReader& in) {
+void MarginalTarget::load(BinaryReader& in) {
   const std::uint64_t n = load_particles(in);
   load_trucks(in, n);
 }

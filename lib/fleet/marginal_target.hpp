@@ -27,8 +27,8 @@
 
 #include <Eigen/Core>
 
-#include "fleet/fleet_model.hpp"
-#include "io/binary_io.hpp"
+#include "model/fleet_model.hpp"
+#include "util/binary_io.hpp"
 #include "model/fleet_marginal.hpp"
 #include "model/table_store.hpp"
 #include "model/truck_table.hpp"
@@ -98,16 +98,16 @@ class MarginalTarget final : public smc::TemperedModel {
   double log_posterior(const HyperVector& theta) const;
 
   // Checkpoint: the particles, the data and the tables (so a resume does not rebuild them).
-  void save(io::BinaryWriter& out) const;
-  void load(io::BinaryReader& in);
+  void save(BinaryWriter& out) const;
+  void load(BinaryReader& in);
   // The same in two parts, so that a stream's checkpoint per truck costs O(1): the particles and
   // settings (fixed size), and the trucks (data, fit and table of each) in [begin, end), which a
   // stream appends to a log; load_trucks() reads `count` such records after load_particles().
-  void save_particles(io::BinaryWriter& out) const;
-  void save_trucks(io::BinaryWriter& out, std::size_t begin, std::size_t end) const;
+  void save_particles(BinaryWriter& out) const;
+  void save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const;
   // Returns the number of trucks the particles belong to (load that many with load_trucks).
-  std::uint64_t load_particles(io::BinaryReader& in);
-  void load_trucks(io::BinaryReader& in, std::uint64_t count);
+  std::uint64_t load_particles(BinaryReader& in);
+  void load_trucks(BinaryReader& in, std::uint64_t count);
 
   // smc::TemperedModel
   Eigen::Index particles() const override { return options_.particles; }

@@ -9,25 +9,25 @@ namespace {
 class MarginalFit final : public OnlineFit {
  public:
   MarginalFit(const site::Site& site, const MarginalSmc::Options& o) : smc_(site, o) {}
-  smc::StageSummary absorb(const io::WimRecord& record) override { return smc_.absorb(record); }
+  smc::StageSummary absorb(const records::WimRecord& record) override { return smc_.absorb(record); }
   void rejuvenate(int sweeps) override { smc_.rejuvenate(sweeps); }
   PosteriorCloud cloud() const override { return smc_.cloud(); }
   long trucks_seen() const override { return smc_.trucks_seen(); }
   const std::deque<std::string>& truck_ids() const override { return smc_.truck_ids(); }
   const smc::TemperedSampler& sampler() const override { return smc_.sampler(); }
-  void save(io::BinaryWriter& out) const override { smc_.save(out); }
-  void restore(io::BinaryReader& in) override { smc_.restore(in); }
+  void save(BinaryWriter& out) const override { smc_.save(out); }
+  void restore(BinaryReader& in) override { smc_.restore(in); }
   std::string core() const override { return "marginal"; }
   std::string note() const override {
     return smc_.last_rebuild().empty() ? "" : "tables rebuilt (" + smc_.last_rebuild() + ")";
   }
   bool splits_state() const override { return true; }
-  void save_state(io::BinaryWriter& out) const override { smc_.save_state(out); }
-  void save_trucks(io::BinaryWriter& out, std::size_t begin, std::size_t end) const override {
+  void save_state(BinaryWriter& out) const override { smc_.save_state(out); }
+  void save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const override {
     smc_.save_trucks(out, begin, end);
   }
   int table_generation() const override { return smc_.table_generation(); }
-  void restore_split(io::BinaryReader& state, io::BinaryReader& trucks) override { smc_.restore_split(state, trucks); }
+  void restore_split(BinaryReader& state, BinaryReader& trucks) override { smc_.restore_split(state, trucks); }
 
  private:
   MarginalSmc smc_;
@@ -36,14 +36,14 @@ class MarginalFit final : public OnlineFit {
 class LatentFit final : public OnlineFit {
  public:
   LatentFit(const site::Site& site, const FleetSmc::Options& o) : smc_(site, o) {}
-  smc::StageSummary absorb(const io::WimRecord& record) override { return smc_.absorb(record); }
+  smc::StageSummary absorb(const records::WimRecord& record) override { return smc_.absorb(record); }
   void rejuvenate(int sweeps) override { smc_.rejuvenate(sweeps); }
   PosteriorCloud cloud() const override { return smc_.cloud(); }
   long trucks_seen() const override { return smc_.trucks_seen(); }
   const std::deque<std::string>& truck_ids() const override { return smc_.truck_ids(); }
   const smc::TemperedSampler& sampler() const override { return smc_.sampler(); }
-  void save(io::BinaryWriter& out) const override { smc_.save(out); }
-  void restore(io::BinaryReader& in) override { smc_.restore(in); }
+  void save(BinaryWriter& out) const override { smc_.save(out); }
+  void restore(BinaryReader& in) override { smc_.restore(in); }
   std::string core() const override { return "latent"; }
 
  private:

@@ -15,8 +15,8 @@
 #include "fleet/fleet_smc.hpp"
 #include "fleet/marginal_smc.hpp"
 #include "fleet/posterior_cloud.hpp"
-#include "io/binary_io.hpp"
-#include "io/wim_log.hpp"
+#include "util/binary_io.hpp"
+#include "records/wim_record.hpp"
 #include "site/site.hpp"
 #include "smc/engine.hpp"
 
@@ -25,15 +25,15 @@ namespace ssrfleet::fleet {
 class OnlineFit {
  public:
   virtual ~OnlineFit() = default;
-  virtual smc::StageSummary absorb(const io::WimRecord& record) = 0;
+  virtual smc::StageSummary absorb(const records::WimRecord& record) = 0;
   // MCMC sweeps at φ = 1 after the last record of an offline replay (the posterior is unchanged).
   virtual void rejuvenate(int sweeps) = 0;
   virtual PosteriorCloud cloud() const = 0;
   virtual long trucks_seen() const = 0;
   virtual const std::deque<std::string>& truck_ids() const = 0;
   virtual const smc::TemperedSampler& sampler() const = 0;
-  virtual void save(io::BinaryWriter& out) const = 0;
-  virtual void restore(io::BinaryReader& in) = 0;
+  virtual void save(BinaryWriter& out) const = 0;
+  virtual void restore(BinaryReader& in) = 0;
   virtual std::string core() const = 0;  // "marginal" or "latent"
   // A line for progress output after absorb(): what the last record cost beyond its stage.
   virtual std::string note() const { return ""; }
@@ -42,10 +42,10 @@ class OnlineFit {
   // and a log of truck records to append to (whole again after table_generation() moves on).
   // A core without the split keeps one state (save/restore) and writes no truck log.
   virtual bool splits_state() const { return false; }
-  virtual void save_state(io::BinaryWriter& out) const { save(out); }
-  virtual void save_trucks(io::BinaryWriter& /*out*/, std::size_t /*begin*/, std::size_t /*end*/) const {}
+  virtual void save_state(BinaryWriter& out) const { save(out); }
+  virtual void save_trucks(BinaryWriter& /*out*/, std::size_t /*begin*/, std::size_t /*end*/) const {}
   virtual int table_generation() const { return 0; }
-  virtual void restore_split(io::BinaryReader& state, io::BinaryReader& /*trucks*/) { restore(state); }
+  virtual void restore_split(BinaryReader& state, BinaryReader& /*trucks*/) { restore(state); }
 };
 
 struct OnlineFitOptions {

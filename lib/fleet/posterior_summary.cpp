@@ -82,4 +82,8 @@ std::vector<ParameterSummary> summarise_weighted(const Eigen::Ref<const Eigen::M
   return summarize_draws(draws, &w);
 }
 
+std::vector<ParameterSummary> summarise_cloud(const PosteriorCloud& cloud) {
+  return summarise_weighted(cloud.theta, cloud.weights);
+}
+
 }  // namespace ssrfleet::fleet

@@ -7,6 +7,8 @@
 
 #include <Eigen/Core>
 
+#include "fleet/posterior_cloud.hpp"
+
 namespace ssrfleet::fleet {
 
 struct ParameterSummary {
@@ -34,5 +36,10 @@ std::vector<ParameterSummary> summarize_draws(const Eigen::Ref<const Eigen::Matr
 // column per draw, one row per quantity, and one weight per column.
 std::vector<ParameterSummary> summarise_weighted(const Eigen::Ref<const Eigen::MatrixXd>& draws_by_column,
                                                  const Eigen::Ref<const Eigen::ArrayXd>& weights);
+
+// The hyperparameter summary the posterior file reports (DESIGN.md §7): one entry per row of
+// cloud.theta (kHyperCount, fleet_model.hpp order), weighted by cloud.weights. Computed here so
+// that io/posterior_json only formats it.
+std::vector<ParameterSummary> summarise_cloud(const PosteriorCloud& cloud);
 
 }  // namespace ssrfleet::fleet

@@ -8,12 +8,12 @@
 #include <boost/random/normal_distribution.hpp>
 #include <boost/random/uniform_01.hpp>
 
-#include "fleet/extended_forward.hpp"
+#include "model/extended_forward.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::fleet {
 
-site::TruckBatch to_batch(const std::vector<Truck>& trucks) {
+site::TruckBatch to_batch(const std::vector<records::Truck>& trucks) {
   site::TruckBatch b;
   b.resize(static_cast<Eigen::Index>(trucks.size()));
   for (std::size_t i = 0; i < trucks.size(); ++i) {
@@ -28,7 +28,7 @@ site::TruckBatch to_batch(const std::vector<Truck>& trucks) {
 }
 
 namespace {
-void check_trucks(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd) {
+void check_trucks(const site::Site& site, const std::vector<records::Truck>& trucks, double noise_sd) {
   if (!(std::isfinite(noise_sd) && noise_sd >= 0.0)) {
     throw UsageError("simulate: noise sd is " + std::to_string(noise_sd) + ", but must be non-negative");
   }
@@ -43,7 +43,7 @@ void check_trucks(const site::Site& site, const std::vector<Truck>& trucks, doub
 
 // Records from the model output plus noise; the noise has a stream of its own, so adding it
 // never changes which fleet a seed draws.
-void add_records(SimulatedLog& log, const std::vector<Truck>& trucks, double noise_sd, std::uint64_t seed) {
+void add_records(SimulatedLog& log, const std::vector<records::Truck>& trucks, double noise_sd, std::uint64_t seed) {
   log.trucks = trucks;
   log.lift_offs = static_cast<int>((log.min_if < 0.0).count());
   boost::random::mt19937_64 engine(seed ^ 0x6e6f697365ULL /* "noise" */);
@@ -51,7 +51,7 @@ void add_records(SimulatedLog& log, const std::vector<Truck>& trucks, double noi
   log.records.reserve(trucks.size());
   for (std::size_t t = 0; t < trucks.size(); ++t) {
     const auto i = static_cast<Eigen::Index>(t);
-    io::WimRecord r;
+    records::WimRecord r;
     r.truck_id = trucks[t].truck_id;
     r.speed_mps = trucks[t].speed_mps;
     r.sprung_mass_kg = trucks[t].sprung_mass_kg;
@@ -64,7 +64,7 @@ void add_records(SimulatedLog& log, const std::vector<Truck>& trucks, double noi
 }
 }  // namespace
 
-SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd,
+SimulatedLog simulate_log(const site::Site& site, const std::vector<records::Truck>& trucks, double noise_sd,
                           std::uint64_t seed) {
   check_trucks(site, trucks, noise_sd);
   SimulatedLog log;
@@ -74,7 +74,7 @@ SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& truc
   return log;
 }
 
-SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& trucks, double noise_sd,
+SimulatedLog simulate_log(const site::Site& site, const std::vector<records::Truck>& trucks, double noise_sd,
                           std::uint64_t seed, const ModelExtension& extension, const std::vector<double>& psi) {
   check_trucks(site, trucks, noise_sd);
   if (static_cast<Eigen::Index>(psi.size()) != extension.dim() || !extension.in_prior(psi.data())) {
@@ -82,7 +82,7 @@ SimulatedLog simulate_log(const site::Site& site, const std::vector<Truck>& truc
   }
   // A fleet-model effect edits the trucks first, each with draws of its own from a stream of the
   // seed's (neither the fleet's nor the noise's, so a seed draws the same base fleet and noise).
-  std::vector<Truck> edited = trucks;
+  std::vector<records::Truck> edited = trucks;
   if (extension.edits_stiffness_distribution()) {
     boost::random::mt19937_64 engine(seed ^ 0x636c6173736573ULL /* "classes" */);
     boost::random::uniform_01<double> uniform;

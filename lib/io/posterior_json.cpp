@@ -3,10 +3,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 
-#include "fleet/fleet_model.hpp"
-#include "fleet/posterior_summary.hpp"
 #include "io/atomic_file.hpp"
+#include "model/fleet_model.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::io {
@@ -18,11 +18,14 @@ constexpr int kFormatVersion = 1;
 nlohmann::json number_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 }  // namespace
 
-nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c) {
+nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vector<fleet::ParameterSummary>& hyper) {
+  if (hyper.size() != static_cast<std::size_t>(fleet::kHyperCount)) {
+    throw std::invalid_argument("io::posterior_to_json(): " + std::to_string(hyper.size()) + " summaries for " +
+                                std::to_string(fleet::kHyperCount) + " hyperparameters");
+  }
   nlohmann::json j;
-  const auto summary = fleet::summarise_weighted(c.theta, c.weights);
   for (int h = 0; h < fleet::kHyperCount; ++h) {
-    const auto& s = summary[static_cast<std::size_t>(h)];
+    const auto& s = hyper[static_cast<std::size_t>(h)];
     j[std::string(fleet::kHyperNames[static_cast<std::size_t>(h)])] = {
         {"mean", s.mean}, {"sd", s.sd}, {"q025", s.q025}, {"q975", s.q975}};
   }
@@ -47,8 +50,9 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c) {
   return j;
 }
 
-void write_posterior_file(const std::string& path, const fleet::PosteriorCloud& cloud) {
-  const nlohmann::json j = posterior_to_json(cloud);
+void write_posterior_file(const std::string& path, const fleet::PosteriorCloud& cloud,
+                          const std::vector<fleet::ParameterSummary>& hyper) {
+  const nlohmann::json j = posterior_to_json(cloud, hyper);
   write_file_atomically(path, [&](std::ostream& os) { os << j.dump(1) << "\n"; });
 }
 

@@ -1,24 +1,30 @@
 // The posterior file: the summary of DESIGN.md §7 (per hyperparameter mean, sd, q025, q975;
 // trucks seen, particles, ESS, log-evidence) followed by the weighted draws that `predict`
-// reads ("cloud"), and the identity of the site it was fitted on.
+// reads ("cloud"), and the identity of the site it was fitted on. This file only formats: the
+// summary is computed by fleet::summarise_cloud (fleet/posterior_summary.hpp).
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "fleet/posterior_cloud.hpp"
+#include "fleet/posterior_summary.hpp"
 
 namespace ssrfleet::io {
 
-// The whole file as JSON (summary + cloud).
-nlohmann::json posterior_to_json(const fleet::PosteriorCloud& cloud);
+// The whole file as JSON (summary + cloud). `hyper` is fleet::summarise_cloud(cloud): one entry
+// per hyperparameter (fleet_model.hpp order); another length is std::invalid_argument.
+nlohmann::json posterior_to_json(const fleet::PosteriorCloud& cloud,
+                                 const std::vector<fleet::ParameterSummary>& hyper);
 
 // Reads a posterior file, or the file `posterior.json` inside a directory (a stream's state
 // directory). Any missing or malformed field is a DataError naming the file and the field; a
 // missing file is a MissingInputError.
 fleet::PosteriorCloud read_posterior_file(const std::string& path);
 
-void write_posterior_file(const std::string& path, const fleet::PosteriorCloud& cloud);
+void write_posterior_file(const std::string& path, const fleet::PosteriorCloud& cloud,
+                          const std::vector<fleet::ParameterSummary>& hyper);
 
 }  // namespace ssrfleet::io

@@ -10,7 +10,7 @@
 
 namespace ssrfleet::io {
 
-std::vector<fleet::Truck> read_truck_list_file(const std::string& path, double lateral_min_m,
+std::vector<records::Truck> read_truck_list_file(const std::string& path, double lateral_min_m,
                                                double lateral_max_m) {
   std::ifstream in(path);
   if (!in) throw MissingInputError("cannot open truck list '" + path + "'");
@@ -25,7 +25,7 @@ std::vector<fleet::Truck> read_truck_list_file(const std::string& path, double l
     col[i] = column_index(header, names[i]);
     if (col[i] < 0) throw DataError(path, header_line, names[i], "required column is missing from the header");
   }
-  std::vector<fleet::Truck> trucks;
+  std::vector<records::Truck> trucks;
   std::unordered_set<std::string> ids;
   while (csv.next(row)) {
     if (row.fields.size() != header.size()) {
@@ -39,7 +39,7 @@ std::vector<fleet::Truck> read_truck_list_file(const std::string& path, double l
       if (v <= 0.0) throw DataError(path, row.line, names[i], "value " + field(i) + " must be positive");
       return v;
     };
-    fleet::Truck t;
+    records::Truck t;
     t.truck_id = field(0);
     if (t.truck_id.empty()) throw DataError(path, row.line, "truck_id", "empty truck_id");
     if (!ids.insert(t.truck_id).second) throw DataError(path, row.line, "truck_id", "duplicate truck_id '" + t.truck_id + "'");
@@ -60,7 +60,7 @@ std::vector<fleet::Truck> read_truck_list_file(const std::string& path, double l
   return trucks;
 }
 
-void write_truck_list(std::ostream& out, const std::vector<fleet::Truck>& trucks) {
+void write_truck_list(std::ostream& out, const std::vector<records::Truck>& trucks) {
   out << "truck_id,speed_mps,sprung_mass_kg,k_npm,kt_npm,z_m\n";
   out.precision(std::numeric_limits<double>::max_digits10);
   for (const auto& t : trucks) {

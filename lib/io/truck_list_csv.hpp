@@ -6,17 +6,17 @@
 #include <string>
 #include <vector>
 
-#include "fleet/truck.hpp"
+#include "records/truck.hpp"
 
 namespace ssrfleet::io {
 
 // Reads and checks a truck list: every required column present, every value a finite number,
 // ids unique, speed / mass / stiffnesses positive, z within [lateral_min_m, lateral_max_m] (the
 // road surface). Any failure is a DataError naming file, line and field.
-std::vector<fleet::Truck> read_truck_list_file(const std::string& path, double lateral_min_m,
+std::vector<records::Truck> read_truck_list_file(const std::string& path, double lateral_min_m,
                                                double lateral_max_m);
 
 // Writes trucks in the same format at full precision.
-void write_truck_list(std::ostream& out, const std::vector<fleet::Truck>& trucks);
+void write_truck_list(std::ostream& out, const std::vector<records::Truck>& trucks);
 
 }  // namespace ssrfleet::io

@@ -65,14 +65,14 @@ WimLogReader::WimLogReader(std::istream& in, std::string source_name, double uns
   sensors_ = static_cast<int>(value_cols_.size());
 }
 
-WimRecord WimLogReader::parse(const CsvRow& row) const {
+records::WimRecord WimLogReader::parse(const CsvRow& row) const {
   const std::string& src = csv_.source_name();
   if (row.fields.size() != header_fields_) {
     throw DataError(src, row.line, "columns",
                     "row has " + std::to_string(row.fields.size()) + " fields but the header has " +
                         std::to_string(header_fields_));
   }
-  WimRecord r;
+  records::WimRecord r;
   r.line = row.line;
   r.truck_id = row.fields[static_cast<std::size_t>(id_col_)];
   if (r.truck_id.empty()) throw DataError(src, row.line, "truck_id", "empty truck_id");
@@ -107,7 +107,7 @@ WimRecord WimLogReader::parse(const CsvRow& row) const {
   return r;
 }
 
-WimLogReader::Status WimLogReader::next(WimRecord& record, Rejection& why) {
+WimLogReader::Status WimLogReader::next(records::WimRecord& record, Rejection& why) {
   CsvRow row;
   if (!csv_.next(row)) return Status::end;
   try {
@@ -124,12 +124,12 @@ WimLogReader::Status WimLogReader::next(WimRecord& record, Rejection& why) {
   }
 }
 
-std::vector<WimRecord> read_wim_log_file(const std::string& path, double unsprung_mass_kg, int* sensors_out) {
+std::vector<records::WimRecord> read_wim_log_file(const std::string& path, double unsprung_mass_kg, int* sensors_out) {
   std::ifstream in(path);
   if (!in) throw MissingInputError("cannot open WIM log '" + path + "'");
   WimLogReader reader(in, path, unsprung_mass_kg);
-  std::vector<WimRecord> records;
-  WimRecord r;
+  std::vector<records::WimRecord> records;
+  records::WimRecord r;
   Rejection why;
   for (;;) {
     const auto status = reader.next(r, why);
@@ -143,7 +143,7 @@ std::vector<WimRecord> read_wim_log_file(const std::string& path, double unsprun
   return records;
 }
 
-void write_wim_log(std::ostream& out, const std::vector<WimRecord>& records) {
+void write_wim_log(std::ostream& out, const std::vector<records::WimRecord>& records) {
   const Eigen::Index sensors = records.empty() ? 0 : records.front().impact_factor.size();
   const bool with_time = !records.empty() && records.front().time_s.has_value();
   out << "truck_id";

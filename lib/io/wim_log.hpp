@@ -18,17 +18,9 @@
 #include <Eigen/Core>
 
 #include "io/csv_reader.hpp"
+#include "records/wim_record.hpp"
 
 namespace ssrfleet::io {
-
-struct WimRecord {
-  std::string truck_id;
-  std::optional<double> time_s;
-  double speed_mps = 0.0;
-  double sprung_mass_kg = 0.0;
-  Eigen::VectorXd impact_factor;  // one per sensor, in sensor order
-  std::size_t line = 0;           // where it came from
-};
 
 struct Rejection {
   std::size_t line = 0;
@@ -66,7 +58,7 @@ class WimLogReader {
   const std::string& header_line() const { return header_raw_; }
 
   // Next record: `record` on success, `rejected` (with `why` filled) for a bad one, `end` at EOF.
-  Status next(WimRecord& record, Rejection& why);
+  Status next(records::WimRecord& record, Rejection& why);
 
   // Truck ids the reader treats as already absorbed (e.g. after a resume): a later record with
   // one of these ids is rejected as a duplicate.
@@ -74,7 +66,7 @@ class WimLogReader {
   void set_follow(bool follow) { csv_.set_follow(follow); }
 
  private:
-  WimRecord parse(const CsvRow& row) const;
+  records::WimRecord parse(const CsvRow& row) const;
 
   CsvReader csv_;
   double unsprung_mass_kg_;
@@ -90,10 +82,10 @@ class WimLogReader {
 };
 
 // Reads a whole log; the first bad record is an error (DataError naming file, line, field).
-std::vector<WimRecord> read_wim_log_file(const std::string& path, double unsprung_mass_kg,
+std::vector<records::WimRecord> read_wim_log_file(const std::string& path, double unsprung_mass_kg,
                                          int* sensors_out = nullptr);
 
 // Writes records as a WIM log with if_ columns, full precision (round trips bit-exactly).
-void write_wim_log(std::ostream& out, const std::vector<WimRecord>& records);
+void write_wim_log(std::ostream& out, const std::vector<records::WimRecord>& records);
 
 }  // namespace ssrfleet::io

@@ -18,7 +18,7 @@
 // particles in the far lower tail of σ_k or σ_kt.
 #pragma once
 
-#include "fleet/fleet_model.hpp"
+#include "model/fleet_model.hpp"
 #include "model/table_store.hpp"
 #include "model/truck_table.hpp"
 

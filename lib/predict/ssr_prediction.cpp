@@ -10,8 +10,8 @@
 #include <boost/random/uniform_01.hpp>
 #include <boost/random/uniform_int_distribution.hpp>
 
-#include "fleet/fleet_model.hpp"
-#include "fleet/truncated_samplers.hpp"
+#include "model/fleet_model.hpp"
+#include "model/truncated_samplers.hpp"
 #include "util/errors.hpp"
 #include "util/quantile.hpp"
 

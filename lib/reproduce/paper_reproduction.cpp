@@ -7,10 +7,10 @@
 #include <iomanip>
 #include <sstream>
 
-#include "fleet/fleet_distribution.hpp"
 #include "fleet/online_fit.hpp"
 #include "fleet/simulator.hpp"
 #include "io/atomic_file.hpp"
+#include "model/fleet_distribution.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "reproduce/gnuplot_scripts.hpp"
 #include "site/road_source.hpp"
@@ -62,7 +62,7 @@ struct Writer {
   }
 };
 
-fleet::PosteriorCloud stream_fit(const site::Site& site, const std::vector<io::WimRecord>& records, const Options& o,
+fleet::PosteriorCloud stream_fit(const site::Site& site, const std::vector<records::WimRecord>& records, const Options& o,
                                  const std::string& label,
                                  const std::function<void(std::size_t, const fleet::OnlineFit&)>& after_each) {
   fleet::OnlineFitOptions so;  // the default (marginal) core, as `fit` uses
@@ -99,7 +99,7 @@ std::array<fleet::ParameterSummary, fleet::kHyperCount> summarise(const fleet::P
 
 // Share of observed IFs (rows of records, sensors [from, to)) inside the prediction's limits at
 // prediction index (m - from + offset).
-double coverage(const std::vector<io::WimRecord>& records, const predict::SsrPrediction& p, int from, int to,
+double coverage(const std::vector<records::WimRecord>& records, const predict::SsrPrediction& p, int from, int to,
                 int pred_offset) {
   long in = 0, all = 0;
   for (const auto& r : records) {
@@ -113,7 +113,7 @@ double coverage(const std::vector<io::WimRecord>& records, const predict::SsrPre
   return all ? static_cast<double>(in) / static_cast<double>(all) : 0.0;
 }
 
-Eigen::ArrayXd observed_mean(const std::vector<io::WimRecord>& records, int sensors) {
+Eigen::ArrayXd observed_mean(const std::vector<records::WimRecord>& records, int sensors) {
   Eigen::ArrayXd m = Eigen::ArrayXd::Zero(sensors);
   for (const auto& r : records) m += r.impact_factor.head(sensors).array();
   return m / static_cast<double>(records.size());
@@ -226,16 +226,16 @@ Result run(const Options& o) {
       fleet::Hyper mean, sd;
       double lo, hi;
       bool truncated;
-      double (*value)(const fleet::Truck&);
+      double (*value)(const records::Truck&);
     };
     const std::array<Var, 3> vars = {{
         {"k", fleet::kK, fleet::kSigmaK, dist.stiffness_npm.mean - 4 * dist.stiffness_npm.sd,
-         dist.stiffness_npm.mean + 4 * dist.stiffness_npm.sd, false, [](const fleet::Truck& t) { return t.stiffness_npm; }},
+         dist.stiffness_npm.mean + 4 * dist.stiffness_npm.sd, false, [](const records::Truck& t) { return t.stiffness_npm; }},
         {"kt", fleet::kKt, fleet::kSigmaKt, dist.tyre_stiffness_npm.mean - 4 * dist.tyre_stiffness_npm.sd,
          dist.tyre_stiffness_npm.mean + 4 * dist.tyre_stiffness_npm.sd, false,
-         [](const fleet::Truck& t) { return t.tyre_stiffness_npm; }},
+         [](const records::Truck& t) { return t.tyre_stiffness_npm; }},
         {"z", fleet::kZ, fleet::kSigmaZ, site.lateral_min_m(), site.lateral_max_m(), true,
-         [](const fleet::Truck& t) { return t.lateral_m; }},
+         [](const records::Truck& t) { return t.lateral_m; }},
     }};
     const std::array<fleet::Normal, 3> true_dist = {dist.stiffness_npm, dist.tyre_stiffness_npm, dist.lateral_m};
     const int G = 161, bins = 16;
@@ -311,7 +311,7 @@ Result run(const Options& o) {
     site::SiteOptions so10;
     so10.sensors.count = fitted;
     const site::Site site10(site::load_road("AS1"), so10);
-    std::vector<io::WimRecord> records10 = records;
+    std::vector<records::WimRecord> records10 = records;
     for (auto& r : records10) r.impact_factor = Eigen::VectorXd(r.impact_factor.head(fitted));
     const auto cloud10 = stream_fit(site10, records10, o, "fit on sensors 1-" + std::to_string(fitted) + " (Fig. 8)", {});
     const auto pred8 = predict::predict_ssr(cloud10, site, {}, popts);

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "fleet/fleet_model.hpp"
 #include "fleet/posterior_summary.hpp"
+#include "model/fleet_model.hpp"
 
 namespace ssrfleet::reproduce {
 

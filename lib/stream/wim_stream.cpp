@@ -8,10 +8,11 @@
 #include <thread>
 #include <unordered_set>
 
+#include "fleet/posterior_summary.hpp"
 #include "io/atomic_file.hpp"
-#include "io/binary_io.hpp"
 #include "io/posterior_json.hpp"
 #include "io/wim_log.hpp"
+#include "util/binary_io.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::stream {
@@ -40,7 +41,7 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   if (!fs::exists(checkpoint)) return;
   std::ifstream in(checkpoint, std::ios::binary);
   if (!in) throw IoError("stream: cannot read '" + checkpoint + "'");
-  io::BinaryReader reader(in, checkpoint);
+  BinaryReader reader(in, checkpoint);
   const auto magic = reader.value<std::uint64_t>("magic");
   if (magic == kOldCheckpointMagic) {
     reader.fail("format", "stream state format version 1 (ssrfleet 0.1, latent core, before the truck log): this build "
@@ -73,7 +74,7 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
     if (fs::file_size(log) > trucks_bytes_) fs::resize_file(log, trucks_bytes_);
     std::ifstream trucks_in(log, std::ios::binary);
     if (!trucks_in) throw IoError("stream: cannot read '" + log + "'");
-    io::BinaryReader trucks(trucks_in, log);
+    BinaryReader trucks(trucks_in, log);
     smc_->restore_split(reader, trucks);
     if (static_cast<std::uint64_t>(smc_->trucks_seen()) != trucks_written_) {
       reader.fail("trucks_written", "the checkpoint and the truck log disagree on the truck count");
@@ -97,13 +98,13 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
     const auto n = static_cast<std::uint64_t>(smc_->trucks_seen());
     if (smc_->table_generation() != trucks_generation_ || trucks_written_ > n) {
       io::write_file_atomically(log, [&](std::ostream& os) {
-        io::BinaryWriter out(os);
+        BinaryWriter out(os);
         smc_->save_trucks(out, 0, n);
       });
       trucks_generation_ = smc_->table_generation();
     } else if (n > trucks_written_) {
       std::ostringstream records;
-      io::BinaryWriter out(records);
+      BinaryWriter out(records);
       smc_->save_trucks(out, trucks_written_, n);
       io::append_file_synced(log, records.str());
     }
@@ -111,7 +112,7 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
     trucks_bytes_ = fs::file_size(log);
   }
   io::write_file_atomically(path_in(options_.state_dir, "checkpoint.bin"), [&](std::ostream& os) {
-    io::BinaryWriter out(os);
+    BinaryWriter out(os);
     out.value(kStreamMagic);
     out.value(kStreamVersion);
     out.text(source);
@@ -123,7 +124,8 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
     out.value<std::int32_t>(trucks_generation_);
     smc_->save_state(out);
   });
-  io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), smc_->cloud());
+  const fleet::PosteriorCloud cloud = smc_->cloud();
+  io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), cloud, fleet::summarise_cloud(cloud));
 }
 
 void WimStream::report() const {
@@ -155,7 +157,7 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
   rejects_bytes_ = fs::file_size(rejects_path);
 
   StreamCounts counts;
-  io::WimRecord record;
+  records::WimRecord record;
   io::Rejection why;
   for (;;) {
     if (stop.load()) break;

@@ -1,6 +1,8 @@
-// Little helpers for the checkpoint file: native-endian binary values, strings and Eigen
-// arrays. A checkpoint is read back on the machine that wrote it (a stream resuming after a
-// crash), so native layout is enough; a magic word and a version guard against anything else.
+// A plain byte codec (it knows no file format and no model): native-endian binary values, strings
+// and Eigen arrays, written to and read from any stream. Its user is the checkpoint file (fleet and
+// stream save and restore through it), which is why it lives in util, below both.
+// A checkpoint is read back on the machine that wrote it (a stream resuming after a crash), so
+// native layout is enough; a magic word and a version guard against anything else.
 // Reading past the end or a size that does not fit is a DataError naming the file.
 #pragma once
 
@@ -14,7 +16,7 @@
 
 #include "util/errors.hpp"
 
-namespace ssrfleet::io {
+namespace ssrfleet {
 
 class BinaryWriter {
  public:
@@ -77,4 +79,4 @@ class BinaryReader {
   std::string source_;
 };
 
-}  // namespace ssrfleet::io
+}  // namespace ssrfleet

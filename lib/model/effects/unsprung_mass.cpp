@@ -1,6 +1,6 @@
 // unsprung_mass: the axle's mass m1 differs from the value the site assumes (420 kg by default).
 // It moves the axle-hop frequency, and with it the pattern of dynamic force along the road.
-#include "discrepancy/extensions/vehicle_constant.hpp"
+#include "model/effects/vehicle_constant.hpp"
 
 namespace ssrfleet::fleet {
 namespace {

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "fleet/model_extension.hpp"
+#include "model/model_extension.hpp"
 
 namespace ssrfleet::fleet {
 namespace {

@@ -7,7 +7,7 @@
 
 #include <Eigen/Core>
 
-#include "fleet/model_extension.hpp"
+#include "model/model_extension.hpp"
 #include "site/site.hpp"
 
 namespace ssrfleet::fleet {

@@ -1,6 +1,6 @@
 // suspension_damping: the suspension's viscous damping c_b differs from the value the site
 // assumes (20 kN s/m by default). It sets how long body bounce rings on after a disturbance.
-#include "discrepancy/extensions/vehicle_constant.hpp"
+#include "model/effects/vehicle_constant.hpp"
 
 namespace ssrfleet::fleet {
 namespace {

@@ -1,6 +1,6 @@
 // speed_bias: the WIM system's speeds are biased by a factor, logged = b x true, so the car
 // really drove at logged / b and the road's wavelengths excite it at other frequencies.
-#include "fleet/model_extension.hpp"
+#include "model/model_extension.hpp"
 
 namespace ssrfleet::fleet {
 namespace {

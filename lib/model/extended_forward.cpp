@@ -1,4 +1,4 @@
-#include "fleet/extended_forward.hpp"
+#include "model/extended_forward.hpp"
 
 #include <map>
 

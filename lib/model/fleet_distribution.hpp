@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "fleet/truck.hpp"
+#include "records/truck.hpp"
 
 namespace ssrfleet::fleet {
 
@@ -30,7 +30,7 @@ struct FleetDistribution {
 // Draws n trucks with ids "T0001", ... Masses, stiffnesses and speeds are truncated to positive
 // values and z to [lateral_min_m, lateral_max_m] (the surface), by rejection: a truck must be
 // physical and must drive on the road. Deterministic for a seed on every machine (Boost.Random).
-std::vector<Truck> draw_fleet(const FleetDistribution& dist, int n, double lateral_min_m,
+std::vector<records::Truck> draw_fleet(const FleetDistribution& dist, int n, double lateral_min_m,
                               double lateral_max_m, std::uint64_t seed);
 
 }  // namespace ssrfleet::fleet

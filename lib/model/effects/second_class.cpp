@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "fleet/fleet_model.hpp"
-#include "fleet/model_extension.hpp"
+#include "model/fleet_model.hpp"
+#include "model/model_extension.hpp"
 
 namespace ssrfleet::fleet {
 namespace {
@@ -50,7 +50,7 @@ class SecondClass final : public ModelExtension {
                         double standard_normal) const override {
     return uniform < psi[kShare] ? psi[kMean2] + psi[kSd2] * standard_normal : mean_npm + sd_npm * standard_normal;
   }
-  void edit_simulated_truck(const double* psi, Truck& truck, double uniform, double standard_normal) const override {
+  void edit_simulated_truck(const double* psi, records::Truck& truck, double uniform, double standard_normal) const override {
     if (uniform >= psi[kShare]) return;
     // A non-physical draw (possible only when σ_k2 is a large part of K2) keeps the base class's k.
     const double k = psi[kMean2] + psi[kSd2] * standard_normal;

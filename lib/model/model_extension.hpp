@@ -14,7 +14,7 @@
 // It may also change the fleet model, the distribution of the suspension stiffness k across
 // trucks (edits_stiffness_distribution, e.g. a second class of trucks): the fleet target then
 // uses its density and draws, and the simulator lets it edit each simulated truck.
-// Each catalogue entry lives in one file under lib/discrepancy/extensions/ and registers itself
+// Each catalogue entry lives in one file under lib/model/effects/ and registers itself
 // with ExtensionRegistrar, so adding an effect is one new file.
 #pragma once
 
@@ -26,7 +26,7 @@
 
 #include <Eigen/Core>
 
-#include "fleet/truck.hpp"
+#include "records/truck.hpp"
 #include "site/site.hpp"
 
 namespace ssrfleet::fleet {
@@ -102,7 +102,7 @@ class ModelExtension {
                                 double standard_normal) const;
   // Simulation: turns a truck drawn from the base fleet (simulator.hpp) into one of the extended
   // fleet, from a uniform and a standard normal of its own (e.g. moves it to the second class).
-  virtual void edit_simulated_truck(const double* /*psi*/, Truck& /*truck*/, double /*uniform*/,
+  virtual void edit_simulated_truck(const double* /*psi*/, records::Truck& /*truck*/, double /*uniform*/,
                                     double /*standard_normal*/) const {}
 
   // Optional: a jump between modes of ψ that are far apart and that the data tell apart only

@@ -1,4 +1,4 @@
-#include "fleet/truncated_samplers.hpp"
+#include "model/truncated_samplers.hpp"
 
 #include <limits>
 #include <sstream>

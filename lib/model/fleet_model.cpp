@@ -1,4 +1,4 @@
-#include "fleet/fleet_model.hpp"
+#include "model/fleet_model.hpp"
 
 #include <limits>
 

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "fleet/model_extension.hpp"
+#include "model/model_extension.hpp"
 #include "road/envelopment.hpp"
 
 namespace ssrfleet::fleet {

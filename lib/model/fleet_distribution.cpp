@@ -1,4 +1,4 @@
-#include "fleet/fleet_distribution.hpp"
+#include "model/fleet_distribution.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -46,16 +46,16 @@ void FleetDistribution::validate() const {
   check_normal(lateral_m, "lateral_m", false);
 }
 
-std::vector<Truck> draw_fleet(const FleetDistribution& dist, int n, double lateral_min_m,
+std::vector<records::Truck> draw_fleet(const FleetDistribution& dist, int n, double lateral_min_m,
                               double lateral_max_m, std::uint64_t seed) {
   dist.validate();
   if (n < 1) throw UsageError("fleet: number of trucks is " + std::to_string(n) + ", but must be at least 1");
   boost::random::mt19937_64 engine(seed);
   const double inf = HUGE_VAL;
-  std::vector<Truck> trucks;
+  std::vector<records::Truck> trucks;
   trucks.reserve(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
-    Truck t;
+    records::Truck t;
     char id[32];
     std::snprintf(id, sizeof id, "T%04d", i + 1);
     t.truck_id = id;

@@ -1,4 +1,4 @@
-#include "fleet/model_extension.hpp"
+#include "model/model_extension.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <map>
 #include <sstream>
 
-#include "fleet/fleet_model.hpp"
+#include "model/fleet_model.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::fleet {

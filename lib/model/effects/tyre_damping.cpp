@@ -1,7 +1,7 @@
 // tyre_damping: the tyre dissipates energy (c_t > 0, N s/m), which the base model (c_t = the
 // site's value, 0 in the paper) leaves out. It damps the axle's hop at 8-12 Hz, so the effect is
 // largest where the road excites the axle.
-#include "discrepancy/extensions/vehicle_constant.hpp"
+#include "model/effects/vehicle_constant.hpp"
 
 namespace ssrfleet::fleet {
 namespace {

@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "fleet/model_extension.hpp"
+#include "model/model_extension.hpp"
 
 namespace ssrfleet::fleet {
 

@@ -1,11 +1,13 @@
 // One truck axle as the fleet model sees it (paper §3.1): what the WIM system measures (speed,
 // sprung mass) and what it does not (suspension stiffness k, tyre stiffness k_t, lateral
-// position z). The unsprung mass and suspension damping are the site's constants.
+// position z). The unsprung mass and suspension damping are the site's constants. A truck list
+// (DESIGN.md §7, the input of a simulation) is a std::vector<Truck>; io/truck_list_csv reads
+// and writes it. Plain data: no format, no model.
 #pragma once
 
 #include <string>
 
-namespace ssrfleet::fleet {
+namespace ssrfleet::records {
 
 struct Truck {
   std::string truck_id;
@@ -16,4 +18,4 @@ struct Truck {
   double lateral_m = 1.5;             // z
 };
 
-}  // namespace ssrfleet::fleet
+}  // namespace ssrfleet::records
