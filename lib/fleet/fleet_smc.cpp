@@ -1,5 +1,8 @@
 #include "fleet/fleet_smc.hpp"
 
+#include "fleet/checkpoint_header.hpp"
+#include "fleet/smc_cloud.hpp"
+
 #include <tuple>
 
 #include "util/errors.hpp"
@@ -44,15 +47,11 @@ void FleetSmc::rejuvenate(int sweeps) {
 }
 
 namespace {
-constexpr std::uint64_t kCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
-constexpr std::uint32_t kCheckpointVersion = 1;
+constexpr std::uint32_t kCheckpointVersion = 1;  // checkpoint_header.hpp
 }  // namespace
 
 void FleetSmc::save(BinaryWriter& out) const {
-  out.value(kCheckpointMagic);
-  out.value(kCheckpointVersion);
-  out.text(site_.fingerprint());
-  out.value<std::uint64_t>(sampler_.options().seed);
+  write_checkpoint_header(out, kCheckpointVersion, site_, sampler_.options().seed);
   const auto state = sampler_.state();
   out.value<std::int32_t>(state.stages_run);
   out.value(state.log_evidence);
@@ -63,14 +62,9 @@ void FleetSmc::save(BinaryWriter& out) const {
 }
 
 void FleetSmc::restore(BinaryReader& in) {
-  if (in.value<std::uint64_t>("magic") != kCheckpointMagic) in.fail("magic", "not an ssrfleet checkpoint");
-  if (in.value<std::uint32_t>("version") != kCheckpointVersion) in.fail("version", "unsupported checkpoint version");
-  if (in.text("site") != site_.fingerprint()) {
-    in.fail("site", "the checkpoint belongs to another site (road or site options differ)");
-  }
-  if (in.value<std::uint64_t>("seed") != sampler_.options().seed) {
-    in.fail("seed", "the checkpoint was made with another seed; resume with the seed it started with");
-  }
+  read_checkpoint_header(in, kCheckpointVersion, site_, sampler_.options().seed, [](std::uint32_t v) {
+    return "checkpoint format version " + std::to_string(v) + " is not the latent core's (1): resume it without --window";
+  });
   smc::TemperedSampler::State state;
   state.stages_run = in.value<std::int32_t>("stages_run");
   state.log_evidence = in.value<double>("log_evidence");
@@ -87,20 +81,8 @@ void FleetSmc::restore(BinaryReader& in) {
 }
 
 PosteriorCloud FleetSmc::cloud() const {
-  PosteriorCloud c;
-  c.method = "smc";
-  c.theta = target_.theta();
-  c.weights = sampler_.weights();
-  std::tie(c.speed_mps, c.sprung_mass_kg) = target_.observed_speeds_and_masses();
-  c.site_fingerprint = site_.fingerprint();
-  c.road_name = site_.surface().name;
-  c.sensors = site_.sensors();
-  c.lateral_min_m = site_.lateral_min_m();
-  c.lateral_max_m = site_.lateral_max_m();
-  c.trucks_seen = trucks_seen();
-  c.ess = sampler_.ess();
-  c.log_evidence = sampler_.log_evidence();
-  return c;
+  auto [speeds, masses] = target_.observed_speeds_and_masses();
+  return smc_cloud(site_, sampler_, target_.theta(), std::move(speeds), std::move(masses), trucks_seen());
 }
 
 }  // namespace ssrfleet::fleet

@@ -1,5 +1,8 @@
 #include "fleet/marginal_smc.hpp"
 
+#include "fleet/checkpoint_header.hpp"
+#include "fleet/smc_cloud.hpp"
+
 #include <tuple>
 
 #include "util/errors.hpp"
@@ -48,29 +51,15 @@ smc::MhSummary MarginalSmc::rejuvenate(int sweeps) {
 }
 
 PosteriorCloud MarginalSmc::cloud() const {
-  PosteriorCloud c;
-  c.method = "smc";
-  c.theta = target_.theta();
-  c.weights = sampler_.weights();
   const auto& v = target_.speed_mps();
   const auto& m = target_.sprung_mass_kg();
-  const std::size_t from = v.size() > kPredictionPool ? v.size() - kPredictionPool : 0;
-  c.speed_mps.assign(v.begin() + static_cast<std::ptrdiff_t>(from), v.end());
-  c.sprung_mass_kg.assign(m.begin() + static_cast<std::ptrdiff_t>(from), m.end());
-  c.site_fingerprint = site_.fingerprint();
-  c.road_name = site_.surface().name;
-  c.sensors = site_.sensors();
-  c.lateral_min_m = site_.lateral_min_m();
-  c.lateral_max_m = site_.lateral_max_m();
-  c.trucks_seen = trucks_seen();
-  c.ess = sampler_.ess();
-  c.log_evidence = sampler_.log_evidence();
-  return c;
+  const auto from = static_cast<std::ptrdiff_t>(v.size() > kPredictionPool ? v.size() - kPredictionPool : 0);
+  return smc_cloud(site_, sampler_, target_.theta(), {v.begin() + from, v.end()}, {m.begin() + from, m.end()},
+                   trucks_seen());
 }
 
 namespace {
-constexpr std::uint64_t kCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT", as FleetSmc's
-// Version 1 was the latent-variable core (FleetSmc); version 2 is this one.
+// Version 1 was the latent-variable core (FleetSmc); version 2 is this one (checkpoint_header.hpp).
 constexpr std::uint32_t kCheckpointVersion = 2;
 }  // namespace
 
@@ -82,10 +71,7 @@ void MarginalSmc::save(BinaryWriter& out) const {
 void MarginalSmc::restore(BinaryReader& in) { restore_split(in, in); }
 
 void MarginalSmc::save_state(BinaryWriter& out) const {
-  out.value(kCheckpointMagic);
-  out.value(kCheckpointVersion);
-  out.text(site_.fingerprint());
-  out.value<std::uint64_t>(sampler_.options().seed);
+  write_checkpoint_header(out, kCheckpointVersion, site_, sampler_.options().seed);
   const auto state = sampler_.state();
   out.value<std::int32_t>(state.stages_run);
   out.value<std::int32_t>(state.moves_run);
@@ -102,20 +88,14 @@ void MarginalSmc::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t 
 }
 
 void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {
-  if (in.value<std::uint64_t>("magic") != kCheckpointMagic) in.fail("magic", "not an ssrfleet checkpoint");
-  const auto version = in.value<std::uint32_t>("version");
-  if (version == 1) {
-    in.fail("version", "checkpoint format version 1 was written by the latent-variable core of ssrfleet 0.1; this "
-                       "build's default core reads version 2: replay the log into a new state directory (or resume "
-                       "it with --window, which keeps the latent core)");
-  }
-  if (version != kCheckpointVersion) in.fail("version", "unsupported checkpoint format version " + std::to_string(version));
-  if (in.text("site") != site_.fingerprint()) {
-    in.fail("site", "the checkpoint belongs to another site (road or site options differ)");
-  }
-  if (in.value<std::uint64_t>("seed") != sampler_.options().seed) {
-    in.fail("seed", "the checkpoint was made with another seed; resume with the seed it started with");
-  }
+  read_checkpoint_header(in, kCheckpointVersion, site_, sampler_.options().seed, [](std::uint32_t v) -> std::string {
+    if (v == 1) {
+      return "checkpoint format version 1 was written by the latent-variable core of ssrfleet 0.1; this build's "
+             "default core reads version 2: replay the log into a new state directory (or resume it with --window, "
+             "which keeps the latent core)";
+    }
+    return "unsupported checkpoint format version " + std::to_string(v);
+  });
   smc::TemperedSampler::State state;
   state.stages_run = in.value<std::int32_t>("stages_run");
   state.moves_run = in.value<std::int32_t>("moves_run");

@@ -6,9 +6,12 @@ namespace ssrfleet::fleet {
 
 namespace {
 
-class MarginalFit final : public OnlineFit {
+// What both cores share: the OnlineFit calls forwarded to the core.
+template <class Core>
+class CoreFit : public OnlineFit {
  public:
-  MarginalFit(const site::Site& site, const MarginalSmc::Options& o) : smc_(site, o) {}
+  template <class Options>
+  CoreFit(const site::Site& site, const Options& o) : smc_(site, o) {}
   smc::StageSummary absorb(const records::WimRecord& record) override { return smc_.absorb(record); }
   void rejuvenate(int sweeps) override { smc_.rejuvenate(sweeps); }
   PosteriorCloud cloud() const override { return smc_.cloud(); }
@@ -17,6 +20,14 @@ class MarginalFit final : public OnlineFit {
   const smc::TemperedSampler& sampler() const override { return smc_.sampler(); }
   void save(BinaryWriter& out) const override { smc_.save(out); }
   void restore(BinaryReader& in) override { smc_.restore(in); }
+
+ protected:
+  Core smc_;
+};
+
+class MarginalFit final : public CoreFit<MarginalSmc> {
+ public:
+  using CoreFit::CoreFit;
   std::string core() const override { return "marginal"; }
   std::string note() const override {
     return smc_.last_rebuild().empty() ? "" : "tables rebuilt (" + smc_.last_rebuild() + ")";
@@ -28,26 +39,12 @@ class MarginalFit final : public OnlineFit {
   }
   int table_generation() const override { return smc_.table_generation(); }
   void restore_split(BinaryReader& state, BinaryReader& trucks) override { smc_.restore_split(state, trucks); }
-
- private:
-  MarginalSmc smc_;
 };
 
-class LatentFit final : public OnlineFit {
+class LatentFit final : public CoreFit<FleetSmc> {
  public:
-  LatentFit(const site::Site& site, const FleetSmc::Options& o) : smc_(site, o) {}
-  smc::StageSummary absorb(const records::WimRecord& record) override { return smc_.absorb(record); }
-  void rejuvenate(int sweeps) override { smc_.rejuvenate(sweeps); }
-  PosteriorCloud cloud() const override { return smc_.cloud(); }
-  long trucks_seen() const override { return smc_.trucks_seen(); }
-  const std::deque<std::string>& truck_ids() const override { return smc_.truck_ids(); }
-  const smc::TemperedSampler& sampler() const override { return smc_.sampler(); }
-  void save(BinaryWriter& out) const override { smc_.save(out); }
-  void restore(BinaryReader& in) override { smc_.restore(in); }
+  using CoreFit::CoreFit;
   std::string core() const override { return "latent"; }
-
- private:
-  FleetSmc smc_;
 };
 
 }  // namespace
