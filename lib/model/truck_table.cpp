@@ -1,5 +1,7 @@
 #include "model/truck_table.hpp"
 
+#include "model/truck_search.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -15,141 +17,14 @@
 
 namespace ssrfleet::model {
 
+using detail::check_inputs;
+using detail::Fitter;
+using detail::Point;
+using detail::simulate;
+
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// Impact factors (sensors x passes) of the trucks at the given (k, k_t, z): batched calls on
-// chunks of the passes (each pass is independent, so the chunking changes no bit).
-Eigen::ArrayXXd simulate(const site::Site& site, double speed_mps, double sprung_mass_kg,
-                         const std::vector<double>& k, const std::vector<double>& kt, const std::vector<double>& z,
-                         const util::ParallelRange& parallel = util::serial_range) {
-  const auto n = static_cast<Eigen::Index>(k.size());
-  Eigen::ArrayXXd out(site.sensors(), n);
-  // Chunks of whole integrator blocks; a small batch stays in one call.
-  constexpr Eigen::Index kChunk = 4 * vehicle::batch_block_trucks;
-  const Eigen::Index chunks = (n + kChunk - 1) / kChunk;
-  parallel(chunks, [&](Eigen::Index cb, Eigen::Index ce) {
-    const Eigen::Index begin = cb * kChunk, end = std::min(n, ce * kChunk);
-    site::TruckBatch batch;
-    batch.resize(end - begin);
-    batch.speed_mps.setConstant(speed_mps);
-    batch.sprung_mass_kg.setConstant(sprung_mass_kg);
-    for (Eigen::Index i = begin; i < end; ++i) {
-      batch.stiffness_npm[i - begin] = k[static_cast<std::size_t>(i)];
-      batch.tyre_stiffness_npm[i - begin] = kt[static_cast<std::size_t>(i)];
-      batch.lateral_m[i - begin] = z[static_cast<std::size_t>(i)];
-    }
-    if (end > begin) site.impact_factors(batch, out.middleCols(begin, end - begin));
-  });
-  return out;
-}
-
-void check_inputs(const site::Site& site, const Eigen::Ref<const Eigen::VectorXd>& y) {
-  if (y.size() != site.sensors()) {
-    throw UsageError("truck table: the record has " + std::to_string(y.size()) + " impact factors but the site has " +
-                     std::to_string(site.sensors()) + " sensors");
-  }
-}
-
-// Sum of squared residuals of every column of `ifs` against y.
-Eigen::ArrayXd column_ssr(const Eigen::ArrayXXd& ifs, const Eigen::Ref<const Eigen::VectorXd>& y) {
-  return (ifs.colwise() - y.array()).square().colwise().sum().transpose();
-}
-
-// The best (k, k_t) fit at fixed z by Gauss–Newton with Levenberg damping in (log k, log k_t, z).
-struct Point {
-  double log_k, log_kt, z;
-};
-
-struct Fitter {
-  const site::Site& site;
-  double speed, mass;
-  const Eigen::Ref<const Eigen::VectorXd>& y;
-  int passes = 0;
-
-  // Residuals at p and the Jacobian of the impact factors by forward differences.
-  void residual_and_jacobian(const Point& p, Eigen::VectorXd& r, Eigen::MatrixXd& J) {
-    const double h_log = 1e-4, h_z = 2e-3;
-    const double lo = site.lateral_min_m(), hi = site.lateral_max_m();
-    // Step z inwards at the road's edge so every evaluation stays on the surface.
-    const double dz = (p.z + h_z <= hi) ? h_z : -h_z;
-    std::vector<double> k{std::exp(p.log_k), std::exp(p.log_k + h_log), std::exp(p.log_k), std::exp(p.log_k)};
-    std::vector<double> kt{std::exp(p.log_kt), std::exp(p.log_kt), std::exp(p.log_kt + h_log), std::exp(p.log_kt)};
-    std::vector<double> z{p.z, p.z, p.z, std::clamp(p.z + dz, lo, hi)};
-    const Eigen::ArrayXXd f = simulate(site, speed, mass, k, kt, z);
-    passes += 4;
-    r = y - f.col(0).matrix();
-    J.resize(y.size(), 3);
-    J.col(0) = ((f.col(1) - f.col(0)) / h_log).matrix();
-    J.col(1) = ((f.col(2) - f.col(0)) / h_log).matrix();
-    J.col(2) = ((f.col(3) - f.col(0)) / dz).matrix();
-  }
-
-  double ssr_at(const Point& p) {
-    const Eigen::ArrayXXd f = simulate(site, speed, mass, {std::exp(p.log_k)}, {std::exp(p.log_kt)}, {p.z});
-    passes += 1;
-    return (f.col(0).matrix() - y).squaredNorm();
-  }
-
-  // Levenberg–Marquardt from p; returns the local optimum and its SSR.
-  std::pair<Point, double> optimise(Point p, double ssr) {
-    return optimise(p, ssr, site.lateral_min_m(), site.lateral_max_m());
-  }
-  // The same with z kept in [lo, hi] (one lateral mode of several).
-  std::pair<Point, double> optimise(Point p, double ssr, double lo, double hi) {
-    double lambda = 1e-3;
-    Eigen::VectorXd r;
-    Eigen::MatrixXd J;
-    for (int iter = 0; iter < 40; ++iter) {
-      residual_and_jacobian(p, r, J);
-      const Eigen::Matrix3d JtJ = J.transpose() * J;
-      const Eigen::Vector3d g = J.transpose() * r;
-      bool improved = false;
-      for (int tries = 0; tries < 8 && !improved; ++tries) {
-        Eigen::Matrix3d A = JtJ;
-        A.diagonal() += lambda * JtJ.diagonal().cwiseMax(1e-12);
-        const Eigen::Vector3d step = A.ldlt().solve(g);
-        Point q{p.log_k + std::clamp(step[0], -0.5, 0.5), p.log_kt + std::clamp(step[1], -0.5, 0.5),
-                std::clamp(p.z + std::clamp(step[2], -0.1, 0.1), lo, hi)};
-        const double s = ssr_at(q);
-        if (s < ssr) {
-          const double gain = ssr - s;
-          p = q;
-          ssr = s;
-          lambda = std::max(lambda * 0.3, 1e-9);
-          improved = true;
-          if (gain < 1e-12 * std::max(ssr, 1e-30)) return {p, ssr};
-        } else {
-          lambda *= 10.0;
-        }
-      }
-      if (!improved) break;
-    }
-    return {p, ssr};
-  }
-
-  // SSR at every lateral line at fixed (k, k_t); returns the best line's position and SSR.
-  std::pair<double, double> scan_lines(const std::vector<double>& ks, const std::vector<double>& kts,
-                                       double* best_k, double* best_kt) {
-    const road::Surface& s = site.surface();
-    std::vector<double> k, kt, z;
-    for (std::size_t a = 0; a < ks.size(); ++a) {
-      for (Eigen::Index j = 0; j < s.lines(); ++j) {
-        k.push_back(ks[a]);
-        kt.push_back(kts[a]);
-        z.push_back(s.lateral_m(j));
-      }
-    }
-    const Eigen::ArrayXd ssr = column_ssr(simulate(site, speed, mass, k, kt, z), y);
-    passes += static_cast<int>(k.size());
-    Eigen::Index best = 0;
-    const double best_ssr = ssr.minCoeff(&best);
-    *best_k = k[static_cast<std::size_t>(best)];
-    *best_kt = kt[static_cast<std::size_t>(best)];
-    return {z[static_cast<std::size_t>(best)], best_ssr};
-  }
-};
 
 // What one node contributes: the Laplace-form coefficients and its z-posterior moments at u_ref.
 struct NodeResult {
@@ -208,71 +83,12 @@ NodeResult integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& ifs_by_line, 
   return r;
 }
 
+
 }  // namespace
 
 std::size_t TruckTable::bytes() const {
   return sizeof(TruckTable) + k_index.capacity() * sizeof(std::int32_t) * 2 +
          (c.capacity() + m.capacity() + b.capacity() + z_mean_m.capacity() + z_var_m2.capacity()) * sizeof(float);
-}
-
-TruckFit fit_truck(const site::Site& site, double speed_mps, double sprung_mass_kg,
-                   const Eigen::Ref<const Eigen::VectorXd>& impact_factors, const TruckTableOptions& options) {
-  check_inputs(site, impact_factors);
-  Fitter fitter{site, speed_mps, sprung_mass_kg, impact_factors};
-  // Coarse start: every lateral line at a 3 x 3 spread of (k, k_t) around the hint. The
-  // z-likelihood is multimodal across the road; the stiffnesses only shift its modes a little.
-  std::vector<double> ks, kts;
-  if (options.start_is_close) {
-    ks.push_back(options.k_start_npm);
-    kts.push_back(options.kt_start_npm);
-  } else {
-    for (double fk : {0.6, 1.0, 1.6}) {
-      for (double fkt : {0.7, 1.0, 1.4}) {
-        ks.push_back(options.k_start_npm * fk);
-        kts.push_back(options.kt_start_npm * fkt);
-      }
-    }
-  }
-  double k0 = 0.0, kt0 = 0.0;
-  auto [z0, ssr0] = fitter.scan_lines(ks, kts, &k0, &kt0);
-  auto [best, best_ssr] = fitter.optimise({std::log(k0), std::log(kt0), z0}, ssr0);
-  // At the fitted stiffnesses a different lateral mode may win: rescan once and refit from it.
-  double kr = 0.0, ktr = 0.0;
-  auto [zr, ssr_r] = fitter.scan_lines({std::exp(best.log_k)}, {std::exp(best.log_kt)}, &kr, &ktr);
-  if (ssr_r < best_ssr && std::abs(zr - best.z) > site.surface().dy_m) {
-    auto [p2, s2] = fitter.optimise({best.log_k, best.log_kt, zr}, ssr_r);
-    if (s2 < best_ssr) {
-      best = p2;
-      best_ssr = s2;
-    }
-  }
-
-  TruckFit fit;
-  fit.stiffness_npm = std::exp(best.log_k);
-  fit.tyre_stiffness_npm = std::exp(best.log_kt);
-  fit.lateral_m = best.z;
-  fit.ssr = best_ssr;
-  const int M = static_cast<int>(impact_factors.size());
-  fit.sigma_hat = std::sqrt(best_ssr / std::max(1, M - 3));
-  // Curvature: the likelihood covariance of (k, k_t, z) at σ is σ² (JᵀJ)⁻¹, J in natural units.
-  Eigen::VectorXd r;
-  Eigen::MatrixXd J;
-  fitter.residual_and_jacobian(best, r, J);
-  J.col(0) /= fit.stiffness_npm;
-  J.col(1) /= fit.tyre_stiffness_npm;
-  const Eigen::Matrix3d JtJ = J.transpose() * J;
-  Eigen::Matrix3d cov = JtJ.ldlt().solve(Eigen::Matrix3d::Identity());
-  if (!cov.allFinite() || cov(0, 0) <= 0.0 || cov(1, 1) <= 0.0) {
-    // A degenerate fit (k or k_t has no effect on these sensors): a generic 20 % spread.
-    cov.setZero();
-    cov(0, 0) = std::pow(0.2 * fit.stiffness_npm / 0.02, 2);
-    cov(1, 1) = std::pow(0.2 * fit.tyre_stiffness_npm / 0.02, 2);
-  }
-  fit.stiffness_sd_per_sigma = std::sqrt(cov(0, 0));
-  fit.tyre_stiffness_sd_per_sigma = std::sqrt(cov(1, 1));
-  fit.stiffness_correlation = cov(0, 1) / std::sqrt(cov(0, 0) * cov(1, 1));
-  fit.passes = fitter.passes;
-  return fit;
 }
 
 TruckTable build_truck_table(const site::Site& site, double speed_mps, double sprung_mass_kg,

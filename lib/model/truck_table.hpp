@@ -20,6 +20,8 @@
 //
 // Which nodes. Those whose log I_g(u_ref) is within `keep_nats` of the best node's: the rest
 // carry less than ~e^-keep_nats of the truck's likelihood and are dropped.
+// Files: the best-fit search is truck_fit.cpp, the table build and the brute-force reference are
+// truck_table.cpp; what they share (batched passes, the fitter) is truck_search.hpp.
 #pragma once
 
 #include <cstdint>

@@ -1,0 +1,154 @@
+// Internals shared by the best-fit search (truck_fit.cpp) and the table build (truck_table.cpp):
+// batched integrator passes of one truck at many (k, k_t, z), and a Levenberg–Marquardt fitter.
+// Not part of the model's interface.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "site/site.hpp"
+#include "util/errors.hpp"
+#include "util/parallel_range.hpp"
+
+namespace ssrfleet::model::detail {
+
+// Impact factors (sensors x passes) of the trucks at the given (k, k_t, z): batched calls on
+// chunks of the passes (each pass is independent, so the chunking changes no bit).
+inline Eigen::ArrayXXd simulate(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                         const std::vector<double>& k, const std::vector<double>& kt, const std::vector<double>& z,
+                         const util::ParallelRange& parallel = util::serial_range) {
+  const auto n = static_cast<Eigen::Index>(k.size());
+  Eigen::ArrayXXd out(site.sensors(), n);
+  // Chunks of whole integrator blocks; a small batch stays in one call.
+  constexpr Eigen::Index kChunk = 4 * vehicle::batch_block_trucks;
+  const Eigen::Index chunks = (n + kChunk - 1) / kChunk;
+  parallel(chunks, [&](Eigen::Index cb, Eigen::Index ce) {
+    const Eigen::Index begin = cb * kChunk, end = std::min(n, ce * kChunk);
+    site::TruckBatch batch;
+    batch.resize(end - begin);
+    batch.speed_mps.setConstant(speed_mps);
+    batch.sprung_mass_kg.setConstant(sprung_mass_kg);
+    for (Eigen::Index i = begin; i < end; ++i) {
+      batch.stiffness_npm[i - begin] = k[static_cast<std::size_t>(i)];
+      batch.tyre_stiffness_npm[i - begin] = kt[static_cast<std::size_t>(i)];
+      batch.lateral_m[i - begin] = z[static_cast<std::size_t>(i)];
+    }
+    if (end > begin) site.impact_factors(batch, out.middleCols(begin, end - begin));
+  });
+  return out;
+}
+
+inline void check_inputs(const site::Site& site, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  if (y.size() != site.sensors()) {
+    throw UsageError("truck table: the record has " + std::to_string(y.size()) + " impact factors but the site has " +
+                     std::to_string(site.sensors()) + " sensors");
+  }
+}
+
+// Sum of squared residuals of every column of `ifs` against y.
+inline Eigen::ArrayXd column_ssr(const Eigen::ArrayXXd& ifs, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  return (ifs.colwise() - y.array()).square().colwise().sum().transpose();
+}
+
+
+// The best (k, k_t) fit at fixed z by Gauss–Newton with Levenberg damping in (log k, log k_t, z).
+struct Point {
+  double log_k, log_kt, z;
+};
+
+struct Fitter {
+  const site::Site& site;
+  double speed, mass;
+  const Eigen::Ref<const Eigen::VectorXd>& y;
+  int passes = 0;
+
+  // Residuals at p and the Jacobian of the impact factors by forward differences.
+  void residual_and_jacobian(const Point& p, Eigen::VectorXd& r, Eigen::MatrixXd& J) {
+    const double h_log = 1e-4, h_z = 2e-3;
+    const double lo = site.lateral_min_m(), hi = site.lateral_max_m();
+    // Step z inwards at the road's edge so every evaluation stays on the surface.
+    const double dz = (p.z + h_z <= hi) ? h_z : -h_z;
+    std::vector<double> k{std::exp(p.log_k), std::exp(p.log_k + h_log), std::exp(p.log_k), std::exp(p.log_k)};
+    std::vector<double> kt{std::exp(p.log_kt), std::exp(p.log_kt), std::exp(p.log_kt + h_log), std::exp(p.log_kt)};
+    std::vector<double> z{p.z, p.z, p.z, std::clamp(p.z + dz, lo, hi)};
+    const Eigen::ArrayXXd f = simulate(site, speed, mass, k, kt, z);
+    passes += 4;
+    r = y - f.col(0).matrix();
+    J.resize(y.size(), 3);
+    J.col(0) = ((f.col(1) - f.col(0)) / h_log).matrix();
+    J.col(1) = ((f.col(2) - f.col(0)) / h_log).matrix();
+    J.col(2) = ((f.col(3) - f.col(0)) / dz).matrix();
+  }
+
+  double ssr_at(const Point& p) {
+    const Eigen::ArrayXXd f = simulate(site, speed, mass, {std::exp(p.log_k)}, {std::exp(p.log_kt)}, {p.z});
+    passes += 1;
+    return (f.col(0).matrix() - y).squaredNorm();
+  }
+
+  // Levenberg–Marquardt from p; returns the local optimum and its SSR.
+  std::pair<Point, double> optimise(Point p, double ssr) {
+    return optimise(p, ssr, site.lateral_min_m(), site.lateral_max_m());
+  }
+  // The same with z kept in [lo, hi] (one lateral mode of several).
+  std::pair<Point, double> optimise(Point p, double ssr, double lo, double hi) {
+    double lambda = 1e-3;
+    Eigen::VectorXd r;
+    Eigen::MatrixXd J;
+    for (int iter = 0; iter < 40; ++iter) {
+      residual_and_jacobian(p, r, J);
+      const Eigen::Matrix3d JtJ = J.transpose() * J;
+      const Eigen::Vector3d g = J.transpose() * r;
+      bool improved = false;
+      for (int tries = 0; tries < 8 && !improved; ++tries) {
+        Eigen::Matrix3d A = JtJ;
+        A.diagonal() += lambda * JtJ.diagonal().cwiseMax(1e-12);
+        const Eigen::Vector3d step = A.ldlt().solve(g);
+        Point q{p.log_k + std::clamp(step[0], -0.5, 0.5), p.log_kt + std::clamp(step[1], -0.5, 0.5),
+                std::clamp(p.z + std::clamp(step[2], -0.1, 0.1), lo, hi)};
+        const double s = ssr_at(q);
+        if (s < ssr) {
+          const double gain = ssr - s;
+          p = q;
+          ssr = s;
+          lambda = std::max(lambda * 0.3, 1e-9);
+          improved = true;
+          if (gain < 1e-12 * std::max(ssr, 1e-30)) return {p, ssr};
+        } else {
+          lambda *= 10.0;
+        }
+      }
+      if (!improved) break;
+    }
+    return {p, ssr};
+  }
+
+  // SSR at every lateral line at fixed (k, k_t); returns the best line's position and SSR.
+  std::pair<double, double> scan_lines(const std::vector<double>& ks, const std::vector<double>& kts,
+                                       double* best_k, double* best_kt) {
+    const road::Surface& s = site.surface();
+    std::vector<double> k, kt, z;
+    for (std::size_t a = 0; a < ks.size(); ++a) {
+      for (Eigen::Index j = 0; j < s.lines(); ++j) {
+        k.push_back(ks[a]);
+        kt.push_back(kts[a]);
+        z.push_back(s.lateral_m(j));
+      }
+    }
+    const Eigen::ArrayXd ssr = column_ssr(simulate(site, speed, mass, k, kt, z), y);
+    passes += static_cast<int>(k.size());
+    Eigen::Index best = 0;
+    const double best_ssr = ssr.minCoeff(&best);
+    *best_k = k[static_cast<std::size_t>(best)];
+    *best_kt = kt[static_cast<std::size_t>(best)];
+    return {z[static_cast<std::size_t>(best)], best_ssr};
+  }
+};
+
+
+}  // namespace ssrfleet::model::detail
