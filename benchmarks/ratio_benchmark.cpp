@@ -48,9 +48,13 @@
 #include "model/fleet_model.hpp"
 #include "road/surface_presets.hpp"
 #include "seed_scatter.hpp"
+#include "run_info.hpp"
 #include "util/effective_sample_size.hpp"
 
 using namespace ssrfleet;
+using bench::load_average_1min;
+using bench::run_command;
+using bench::utc_now;
 
 namespace {
 
@@ -58,31 +62,6 @@ using clock_type = std::chrono::steady_clock;
 
 double seconds_since(clock_type::time_point t0) {
   return std::chrono::duration<double>(clock_type::now() - t0).count();
-}
-
-double load_average_1min() {
-  std::ifstream f("/proc/loadavg");
-  double l = -1.0;
-  f >> l;
-  return l;
-}
-
-std::string run_command(const std::string& cmd) {
-  std::string out;
-  if (FILE* p = popen(cmd.c_str(), "r")) {
-    char buf[256];
-    while (fgets(buf, sizeof buf, p)) out += buf;
-    pclose(p);
-  }
-  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-  return out;
-}
-
-std::string utc_now() {
-  const std::time_t t = std::time(nullptr);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
-  return buf;
 }
 
 std::string fmt(double v, int prec = 3) {

@@ -41,8 +41,12 @@
 #include "fleet/marginal_smc.hpp"
 #include "fleet/simulator.hpp"
 #include "site/road_source.hpp"
+#include "run_info.hpp"
 
 using namespace ssrfleet;
+using bench::load_average_1min;
+using bench::run_command;
+using bench::utc_now;
 
 namespace {
 
@@ -71,31 +75,6 @@ double cpu_seconds() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-double load_average_1min() {
-  std::ifstream f("/proc/loadavg");
-  double l = -1.0;
-  f >> l;
-  return l;
-}
-
-std::string run_command(const std::string& cmd) {
-  std::string out;
-  if (FILE* p = popen(cmd.c_str(), "r")) {
-    char buf[256];
-    while (fgets(buf, sizeof buf, p)) out += buf;
-    pclose(p);
-  }
-  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-  return out;
-}
-
-std::string utc_now() {
-  const std::time_t t = std::time(nullptr);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
-  return buf;
 }
 
 nlohmann::json memory_json(const MemoryKb& m) {

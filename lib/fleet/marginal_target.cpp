@@ -105,13 +105,8 @@ MarginalTarget::TableSettings MarginalTarget::ideal_settings(const Eigen::ArrayX
   s.sigma_ref = (theta_.row(kSigmaIf).array().transpose() * W).sum();
   // Integrand width in k: the likelihood sd at σ_ref (geometric mean over trucks) combined with
   // the fleet sd (posterior median; particles far below it meet FleetMarginal's floor).
-  double log_sk = 0.0, log_skt = 0.0;
-  for (const auto& f : fits_) {
-    log_sk += std::log(f.stiffness_sd_per_sigma);
-    log_skt += std::log(f.tyre_stiffness_sd_per_sigma);
-  }
-  const double lik_k = std::exp(log_sk / static_cast<double>(n)) * s.sigma_ref;
-  const double lik_kt = std::exp(log_skt / static_cast<double>(n)) * s.sigma_ref;
+  const double lik_k = std::exp(sum_log_sd_k_ / static_cast<double>(n)) * s.sigma_ref;
+  const double lik_kt = std::exp(sum_log_sd_kt_ / static_cast<double>(n)) * s.sigma_ref;
   const double fleet_k = weighted_quantile(theta_.row(kSigmaK), W, 0.5);
   const double fleet_kt = weighted_quantile(theta_.row(kSigmaKt), W, 0.5);
   const double width_k = 1.0 / std::sqrt(1.0 / (lik_k * lik_k) + 1.0 / (fleet_k * fleet_k));
@@ -185,6 +180,7 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
   sprung_mass_kg_.push_back(sprung_mass_kg);
   observed_if_.push_back(impact_factors);
   fits_.push_back(fit);
+  add_to_width_sums(fit);
   mode_ = Mode::kTruck;
 }
 
@@ -428,6 +424,7 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   sprung_mass_kg_.clear();
   observed_if_.clear();
   fits_.clear();
+  sum_log_sd_k_ = sum_log_sd_kt_ = 0.0;
   store_ = model::TableStore{};
   store_.reserve(static_cast<std::size_t>(n), 0);
   marginal_ = model::FleetMarginal(site_.sensors(), lateral_, settings_.lattice);
@@ -443,6 +440,7 @@ void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
     sprung_mass_kg_.push_back(in.value<double>("truck mass"));
     observed_if_.push_back(in.matrix("impact factors", site_.sensors(), 1));
     fits_.push_back(in.value<model::TruckFit>("truck fit"));
+    add_to_width_sums(fits_.back());
     model::TruckTable t;
     const auto nodes = in.value<std::uint32_t>("table nodes");
     if (nodes > 1'000'000) in.fail("table nodes", "implausible node count " + std::to_string(nodes));

@@ -21,6 +21,7 @@
 // their cost is O(1) per truck amortised.
 #pragma once
 
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -149,6 +150,13 @@ class MarginalTarget final : public smc::TemperedModel {
   std::vector<double> speed_mps_, sprung_mass_kg_;
   std::vector<Eigen::VectorXd> observed_if_;
   std::vector<model::TruckFit> fits_;
+  // Σ_i log of each fit's likelihood sd per unit σ (k and k_t), in truck order: the geometric mean
+  // that sets the lattice spacing, kept as it grows so the per-truck settings cost O(1), not O(n).
+  double sum_log_sd_k_ = 0.0, sum_log_sd_kt_ = 0.0;
+  void add_to_width_sums(const model::TruckFit& f) {
+    sum_log_sd_k_ += std::log(f.stiffness_sd_per_sigma);
+    sum_log_sd_kt_ += std::log(f.tyre_stiffness_sd_per_sigma);
+  }
 
   Eigen::MatrixXd theta_;   // 7 x P
   Eigen::ArrayXd base_sum_;  // Σ ℓ_i over the trucks in log γ
