@@ -53,21 +53,31 @@ double FleetMarginal::log_likelihood(const TableView& table, const ThetaTerms& t
   const double inv_2var = 0.5 / t.lateral_var_m2;
   thread_local std::vector<double> exponents;
   exponents.resize(n);
-  double top = kNegInf;
+  // Two passes, so the compiler vectorises the first (an element-wise map with no loop-carried
+  // state; a running max in the same loop kept it scalar, 70 % of a fit's time) and Eigen the max
+  // and the exponential sum. Same operations in the same order per node: the same bits.
+  double* __restrict out = exponents.data();
+  const std::int32_t* __restrict k_index = table.k_index;
+  const std::int32_t* __restrict kt_index = table.kt_index;
+  const float* __restrict c = table.c;
+  const float* __restrict m = table.m;
+  const float* __restrict bb = table.b;
+  const float* __restrict z_mean = table.z_mean_m;
+  const float* __restrict z_var = table.z_var_m2;
+  const double a0 = t.a0, da = t.da, b0 = t.b0, db = t.db, half_u = t.half_u, log_u = t.log_u;
+  const double lateral_mean = t.lateral_mean_m;
   for (std::size_t g = 0; g < n; ++g) {
-    const double a = t.a0 + t.da * table.k_index[g];
-    const double b = t.b0 + t.db * table.kt_index[g];
-    const double dz = static_cast<double>(table.z_mean_m[g]) - t.lateral_mean_m;
-    const double eps = static_cast<double>(table.z_var_m2[g]) * eps_per_var;
-    const double e = static_cast<double>(table.c[g]) - static_cast<double>(table.m[g]) * t.half_u -
-                     static_cast<double>(table.b[g]) * t.log_u - 0.5 * (a * a + b * b) - 0.5 * eps -
-                     dz * dz * inv_2var * (1.0 - eps + eps * eps);
-    exponents[g] = e;
-    top = e > top ? e : top;
+    const double a = a0 + da * k_index[g];
+    const double b = b0 + db * kt_index[g];
+    const double dz = static_cast<double>(z_mean[g]) - lateral_mean;
+    const double eps = static_cast<double>(z_var[g]) * eps_per_var;
+    out[g] = static_cast<double>(c[g]) - static_cast<double>(m[g]) * half_u - static_cast<double>(bb[g]) * log_u -
+             0.5 * (a * a + b * b) - 0.5 * eps - dz * dz * inv_2var * (1.0 - eps + eps * eps);
   }
+  const Eigen::Map<const Eigen::ArrayXd> e(out, static_cast<Eigen::Index>(n));
+  const double top = n > 0 ? e.maxCoeff() : kNegInf;
   if (!(top > kNegInf)) return kNegInf;
-  const double sum =
-      (Eigen::Map<const Eigen::ArrayXd>(exponents.data(), static_cast<Eigen::Index>(n)) - top).exp().sum();
+  const double sum = (e - top).exp().sum();
   return t.constant - 0.5 * std::log(t.lateral_var_m2) + top + std::log(sum);
 }
 
