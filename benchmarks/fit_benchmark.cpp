@@ -194,7 +194,7 @@ nlohmann::json summary_json(const fleet::ParameterSummary& s) {
 void usage() {
   std::cerr << "usage: fit_benchmark [--trucks 100] [--particles 1024] [--threads 0=all] [--seed 1]\n"
                "                     [--mcmc-iterations 50000] [--mcmc-burn-in 5000] [--accuracy-seeds 7] [--final-sweeps "
-            << fleet::FleetSmc::Options{}.final_sweeps << "]\n"
+            << fleet::FleetSmc::Options{}.sampler.schedule.final_sweeps << "]\n"
                "                     [--json FILE] [--markdown FILE]\n";
 }
 
@@ -202,7 +202,7 @@ void usage() {
 
 int main(int argc, char** argv) {
   int trucks = 100, particles = 1024, threads = 0, mcmc_iterations = 50000, accuracy_seeds = 7;
-  int final_sweeps = fleet::FleetSmc::Options{}.final_sweeps;
+  int final_sweeps = fleet::FleetSmc::Options{}.sampler.schedule.final_sweeps;
   int burn_in = 5000;
   std::uint64_t seed = 1;
   std::string json_path, markdown_path;
@@ -279,7 +279,7 @@ int main(int argc, char** argv) {
     tempering_steps += static_cast<int>(stage.steps.size());
     for (const auto& step : stage.steps) {
       mh_sweeps += step.mh.sweeps;
-      capped_steps += step.mh.sweeps >= smc_options.sampler.mh.max_steps ? 1 : 0;
+      capped_steps += step.mh.sweeps >= smc_options.sampler.schedule.max_sweeps ? 1 : 0;
       if (!step.mh.acceptance.empty()) newest_acceptance_sum += step.mh.acceptance.front();
     }
     resamplings += stage.resamplings();
@@ -431,7 +431,7 @@ int main(int argc, char** argv) {
               resamplings);
   std::printf("  %-38s %12.1f %%   (max_steps %d; newest-truck block acceptance %.2f)\n",
               "steps whose MH sweeps hit max_steps", 100.0 * capped_steps / std::max(1, tempering_steps),
-              smc_options.sampler.mh.max_steps, newest_acceptance);
+              smc_options.sampler.schedule.max_sweeps, newest_acceptance);
   std::printf("  %-38s %12.2f s   (%.2f cores busy on average; load average %.2f before, %.2f after)\n",
               "process CPU time during the replay", smc_cpu_s, cores_used, load_before, load_after_smc);
   std::printf("  %-38s %12.1f   (log evidence %.2f)\n", "final ESS", cloud.ess, cloud.log_evidence);
@@ -576,7 +576,7 @@ int main(int argc, char** argv) {
                 {"cores_busy_average", cores_used},
                 {"load_average_1min", {{"before", load_before}, {"after", load_after_smc}}},
                 {"steps_hitting_max_mh_sweeps", capped_steps},
-                {"max_mh_sweeps_per_step", smc_options.sampler.mh.max_steps},
+                {"max_mh_sweeps_per_step", smc_options.sampler.schedule.max_sweeps},
                 {"newest_block_acceptance_mean", newest_acceptance},
                 {"integrator_passes", smc_passes},
                 {"passes_per_s", passes_per_s},
@@ -693,7 +693,7 @@ int main(int argc, char** argv) {
        << "| SMC passes per second (wall) | " << fmt("%.0f", passes_per_s) << " |\n"
        << "| SMC tempering steps / MH sweeps / resamplings | " << tempering_steps << " / " << mh_sweeps << " / "
        << resamplings << " |\n"
-       << "| SMC tempering steps whose MH sweeps hit max_steps (" << smc_options.sampler.mh.max_steps << ") | "
+       << "| SMC tempering steps whose MH sweeps hit max_steps (" << smc_options.sampler.schedule.max_sweeps << ") | "
        << fmt("%.1f", 100.0 * capped_steps / std::max(1, tempering_steps)) << " % |\n"
        << "| SMC newest-truck MH acceptance (mean over steps) | " << fmt("%.2f", newest_acceptance) << " |\n"
        << "| SMC final ESS | " << fmt("%.0f", cloud.ess) << " |\n"

@@ -126,7 +126,7 @@ SmcResult run_smc(const site::Site& site, const fleet::SimulatedLog& log, const 
     fleet::MarginalSmc smc(site, o);
     const auto t0 = clock_type::now();
     for (const auto& rec : log.records) smc.absorb(rec);
-    smc.rejuvenate(o.final_sweeps);
+    smc.rejuvenate(o.sampler.schedule.final_sweeps);
     const double wall = seconds_since(t0);
     r.wall_s.push_back(wall);
     const fleet::PosteriorCloud c = smc.cloud();
@@ -233,7 +233,7 @@ void write_results(const std::vector<NResult>& results, const std::vector<int>& 
                    {"sigma_if", 0.02},
                    {"data_seed", 1},
                    {"smc", {{"particles", 1024}, {"threads", 2}, {"seeds", seeds}, {"first_seed", 100},
-                            {"final_sweeps", fleet::MarginalSmc::Options{}.final_sweeps}, {"options", "default"}}},
+                            {"final_sweeps", fleet::MarginalSmc::Options{}.sampler.schedule.final_sweeps}, {"options", "default"}}},
                    {"mcmc", {{"threads", 2}, {"seed", 1}, {"options", "default (interweave K_t/sigma_kt, best-fit start)"},
                              {"ess_check_every_sweeps", kCheckEvery}}},
                    {"target_ess", kTargetEss},
@@ -304,7 +304,7 @@ void write_results(const std::vector<NResult>& results, const std::vector<int>& 
   f << "Table 1 fleet, road AS1, sigma_IF 0.02, data seed 1. Commit " << commit << ", nproc " << nproc
     << ", started " << started << ", written " << utc_now() << ". The machine may be shared: see the load.\n\n";
   f << "- SMC: fleet::MarginalSmc, default options, 1,024 particles, 2 threads, replay then rejuvenate("
-    << fleet::MarginalSmc::Options{}.final_sweeps << "); " << seeds
+    << fleet::MarginalSmc::Options{}.sampler.schedule.final_sweeps << "); " << seeds
     << " seeds (100, ...) on the same data. Equivalent ESS = (mean posterior sd)^2 / (variance of the "
     << seeds << " posterior means), the smallest over the 7. **SMC time to ESS 400 = mean wall per fit x 400 / "
        "smallest equivalent ESS.** With " << seeds << " seeds the equivalent ESS carries a chi-square("
@@ -437,7 +437,7 @@ int main(int argc, char** argv) {
     const auto& m = r.mcmc;
     std::cout << "N=" << N << " (load 1-min " << fmt(r.load_before, 2) << " -> " << fmt(r.load_after, 2) << ")\n"
               << "  SMC: mean wall per fit " << fmt(s.mean_wall_s, 2) << " s (replay + " 
-              << fleet::MarginalSmc::Options{}.final_sweeps << " final sweeps); smallest equivalent ESS "
+              << fleet::MarginalSmc::Options{}.sampler.schedule.final_sweeps << " final sweeps); smallest equivalent ESS "
               << fmt(s.scatter.min_ess, 0) << " (" << fleet::kHyperNames[s.scatter.worst] << "), 90 % ["
               << fmt(s.scatter.min_ess_lo90, 0) << ", " << fmt(s.scatter.min_ess_hi90, 0) << "]\n"
               << "       time to ESS 400 = mean wall x 400 / smallest equivalent ESS = " << fmt(s.time_to_400_s, 2)

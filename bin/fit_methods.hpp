@@ -25,11 +25,11 @@ struct FitFlags {
   int older_sweeps = fleet::FleetSmc::Options{}.older_sweeps;  // latent core
   // After the last truck, and per move phase at most: the marginal core's defaults, replaced by
   // the latent core's when that core is chosen and the flag was not given.
-  int final_sweeps = fleet::MarginalSmc::Options{}.final_sweeps;
+  int final_sweeps = fleet::MarginalSmc::Options{}.sampler.schedule.final_sweeps;
   bool final_sweeps_given = false;
   long window = 0;  // bounded memory on the latent core (see stream --window)
   double cess_target = fleet::MarginalSmc::Options{}.sampler.tempering.cess_target;
-  int max_sweeps = fleet::MarginalSmc::Options{}.sampler.mh.max_steps;
+  int max_sweeps = fleet::MarginalSmc::Options{}.sampler.schedule.max_sweeps;
   bool max_sweeps_given = false;
   long iterations = 20000;  // mcmc
   long burn_in = 5000;      // mcmc

@@ -6,6 +6,7 @@
 #include "cli_common.hpp"
 #include "fit_methods.hpp"
 #include "fleet/online_fit.hpp"
+#include "fleet/replay.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::cli {
@@ -56,7 +57,7 @@ fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t 
   o.sampler().threads = flags.threads > 0 ? flags.threads : smc::TemperedSampler::Options::default_threads();
   o.sampler().seed = seed;
   o.sampler().tempering.cess_target = flags.cess_target;
-  if (o.core == fleet::OnlineFitOptions::Core::kMarginal || flags.max_sweeps_given) o.sampler().mh.max_steps = flags.max_sweeps;
+  if (o.core == fleet::OnlineFitOptions::Core::kMarginal || flags.max_sweeps_given) o.sampler().schedule.max_sweeps = flags.max_sweeps;
   o.latent.older_sweeps = flags.older_sweeps;
   o.latent.window = flags.window;
   std::string why;
@@ -70,9 +71,12 @@ fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records:
   const int final_sweeps = flags.final_sweeps_given ? flags.final_sweeps : o.default_final_sweeps();
   auto smc = fleet::make_online_fit(site, o);
   const std::size_t n = records.size();
-  for (std::size_t t = 0; t < n; ++t) {
-    const auto stage = smc->absorb(records[t]);
-    if (progress) {
+  if (progress && flags.verbose)
+    *progress << "fit: move schedule (" << smc->core() << " core)\n" << smc->sampler().options().schedule.describe();
+  fleet::ReplayOptions replay;
+  replay.final_sweeps = final_sweeps;
+  if (progress) {
+    replay.after_record = [&](std::size_t t, const smc::StageSummary& stage, const fleet::OnlineFit& fit) {
       double acc = 0.0;
       int blocks = 0, moves = 0;
       for (const auto& step : stage.steps) {
@@ -81,25 +85,23 @@ fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records:
       }
       *progress << "fit: truck " << (t + 1) << "/" << n << " " << records[t].truck_id << ": " << stage.steps.size()
                 << " steps, " << moves << " move phases, ESS " << std::fixed << std::setprecision(0)
-                << smc->sampler().ess() << "/" << flags.particles;
+                << fit.sampler().ess() << "/" << flags.particles;
       if (blocks) *progress << ", acceptance " << std::setprecision(2) << acc / blocks;
       *progress << ", " << std::setprecision(3) << stage.wall_time_s << " s";
-      const std::string note = smc->note();
+      const std::string note = fit.note();
       *progress << (note.empty() ? "" : "; ") << note << "\n";
       progress->unsetf(std::ios::floatfield);
       if (flags.verbose) *progress << stage.FullReport();
-    }
-  }
-  if (final_sweeps > 0) {
+    };
     // Announced first: on a long log they take a while (one pass over every truck per particle each).
-    if (progress) *progress << "fit: " << final_sweeps << " final sweeps at phi = 1 (" << smc->core() << " core) ..." << std::flush;
-    const auto started = std::chrono::steady_clock::now();
-    smc->rejuvenate(final_sweeps);
-    if (progress) {
-      *progress << " done, " << std::fixed << std::setprecision(3)
-                << std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() << " s\n";
-      progress->unsetf(std::ios::floatfield);
-    }
+    replay.before_final_sweeps = [&](int sweeps) {
+      *progress << "fit: " << sweeps << " final sweeps at phi = 1 (" << smc->core() << " core) ..." << std::flush;
+    };
+  }
+  const fleet::ReplaySummary done = fleet::replay(*smc, records, replay);
+  if (progress && done.final_sweeps > 0) {
+    *progress << " done, " << std::fixed << std::setprecision(3) << done.final_s << " s\n";
+    progress->unsetf(std::ios::floatfield);
   }
   return smc->cloud();
 }

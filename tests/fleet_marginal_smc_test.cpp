@@ -8,6 +8,8 @@
 #include "fleet/batch_mcmc.hpp"
 #include "model/fleet_distribution.hpp"
 #include "fleet/marginal_smc.hpp"
+#include "fleet/online_fit.hpp"
+#include "fleet/replay.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/simulator.hpp"
 #include "util/binary_io.hpp"
@@ -80,8 +82,10 @@ TEST_CASE("IBIS moves only after a resampling, and the independence proposal doe
       if (step.resampled) {
         ++resampled;
         ++moved;
-        REQUIRE(step.mh.independence_acceptance.size() == 1);
-        independence = step.mh.independence_acceptance[0];
+        const smc::MoveRecord* ind = step.mh.find("independence", "theta");
+        REQUIRE(ind != nullptr);
+        CHECK(ind->runs == step.mh.sweeps);  // scheduled first in every sweep, unconditionally
+        independence = ind->acceptance;
       }
     }
   }
@@ -169,4 +173,44 @@ TEST_CASE("the marginal core's posterior agrees with the exact batch MCMC on a s
     CHECK(std::abs(sm - m) / sd < 4.0 * mc + 0.1);
     CHECK(ssd / sd == Approx(1.0).margin(0.25));
   }
+}
+
+TEST_CASE("the replay driver runs the schedule's final sweeps after the last truck", "[marginal][schedule]") {
+  const Case c(12, 4);
+  fleet::OnlineFitOptions o;
+  o.marginal = options(128, 2, 8);
+  o.marginal.sampler.schedule.final_sweeps = 3;
+  // By hand: every record, then exactly the schedule's final sweeps.
+  fleet::MarginalSmc by_hand(c.site, o.marginal);
+  for (const auto& r : c.log.records) by_hand.absorb(r);
+  const smc::MhSummary final_moves = by_hand.rejuvenate(3);
+  CHECK(final_moves.sweeps == 3);
+  const smc::MoveRecord* ind = final_moves.find("independence", "theta");
+  REQUIRE(ind != nullptr);
+  CHECK(ind->runs == 3);
+
+  const auto fit = fleet::make_online_fit(c.site, o);
+  std::size_t seen = 0;
+  fleet::ReplayOptions replay;
+  replay.after_record = [&](std::size_t t, const smc::StageSummary&, const fleet::OnlineFit& f) {
+    CHECK(t == seen++);
+    CHECK(f.trucks_seen() == static_cast<long>(t + 1));
+  };
+  const fleet::ReplaySummary done = fleet::replay(*fit, c.log.records, replay);
+  CHECK(seen == c.log.records.size());
+  CHECK(done.final_sweeps == 3);
+  CHECK(fit->sampler().state().moves_run == 1);
+  // The same bits as by hand: the driver adds nothing of its own.
+  const auto a = fit->cloud(), b = by_hand.cloud();
+  CHECK(a.theta == b.theta);
+  CHECK((a.weights == b.weights).all());
+
+  // final_sweeps 0 runs none; below -1 is refused.
+  const auto none = fleet::make_online_fit(c.site, o);
+  fleet::ReplayOptions no_final;
+  no_final.final_sweeps = 0;
+  CHECK(fleet::replay(*none, c.log.records, no_final).final_sweeps == 0);
+  CHECK(none->sampler().state().moves_run == 0);
+  no_final.final_sweeps = -2;
+  CHECK_THROWS_AS(fleet::replay(*none, c.log.records, no_final), UsageError);
 }

@@ -254,3 +254,48 @@ TEST_CASE("a checkpoint from another seed or a corrupt one is refused", "[fleet]
     CHECK_THROWS_WITH(same.restore(reader), Catch::Contains("ck.bin") && Catch::Contains("ends early"));
   }
 }
+
+TEST_CASE("the latent core runs every scheduled move as its schedule says", "[fleet][schedule]") {
+  const Case c(4, 9);
+  const auto o = smc_options(128, 2, 5);
+  const smc::MoveSchedule schedule = fleet::FleetSmc::move_schedule(o);
+  // The schedule is data: the newest truck's random walk, the older trucks at phi = 1 twice a
+  // stage, then theta; no extension moves without an extension.
+  REQUIRE(schedule.sweep.size() == 3);
+  CHECK(schedule.sweep[1].model_move == "older trucks");
+  CHECK(schedule.sweep[1].only_at_phi_one);
+  CHECK(schedule.sweep[1].max_runs_per_stage == o.older_sweeps);
+  CHECK(schedule.sweep[2].model_move == "theta");
+  CHECK_THAT(schedule.describe(), Catch::Contains("older trucks") && Catch::Contains("at most 2 per stage"));
+
+  fleet::FleetSmc smc(c.site, o);
+  for (std::size_t t = 0; t < c.log.records.size(); ++t) {
+    const smc::StageSummary& s = smc.absorb(c.log.records[t]);
+    int older_runs = 0, older_skipped = 0;
+    for (const smc::StepInfo& step : s.steps) {
+      const smc::MoveRecord* walk = step.mh.find("random walk", step.mh.block_names.at(0));
+      const smc::MoveRecord* theta = step.mh.find("theta");
+      const smc::MoveRecord* older = step.mh.find("older trucks");
+      REQUIRE(walk != nullptr);
+      REQUIRE(theta != nullptr);
+      REQUIRE(older != nullptr);
+      CHECK(walk->runs == step.mh.sweeps);
+      CHECK(theta->runs == step.mh.sweeps);
+      CHECK(std::isnan(theta->acceptance));  // Gibbs draws report no acceptance
+      CHECK((walk->acceptance > 0.0 && walk->acceptance <= 1.0));
+      if (step.phi < 1.0) CHECK(older->runs == 0);
+      older_runs += older->runs;
+      older_skipped += older->skipped;
+      CHECK(older->runs + older->skipped == step.mh.sweeps);
+    }
+    // Truck 1 has no older truck: the move reports it did not run. From truck 2 on it ran exactly
+    // older_sweeps times in the stage, with an acceptance.
+    if (t == 0) {
+      CHECK(older_runs == 0);
+    } else {
+      CHECK(older_runs == o.older_sweeps);
+      const smc::MoveRecord* last = s.steps.back().mh.find("older trucks");
+      CHECK((last->acceptance > 0.0 && last->acceptance <= 1.0));
+    }
+  }
+}

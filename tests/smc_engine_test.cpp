@@ -255,8 +255,8 @@ TEST_CASE("every step hits the conditional-ESS target and the summary is consist
     CHECK(step.phi > phi);
     CHECK(step.phi == Approx(phi + step.delta_phi).epsilon(1e-14));
     CHECK(step.resampled == (step.ess < options.ess_rmin * 500));
-    CHECK(step.mh.sweeps >= options.mh.min_steps);
-    CHECK(step.mh.sweeps <= options.mh.max_steps);
+    CHECK(step.mh.sweeps >= options.schedule.min_sweeps);
+    CHECK(step.mh.sweeps <= options.schedule.max_sweeps);
     REQUIRE(step.mh.acceptance.size() == 2);
     for (double a : step.mh.acceptance) CHECK((a > 0.0 && a <= 1.0));
     phi = step.phi;
@@ -299,9 +299,17 @@ TEST_CASE("sampler options are validated with messages naming the rule", "[smc][
   bad.ess_rmin = -0.1;
   CHECK_FALSE(bad.IsValid(&error));
   bad = good;
-  bad.mh.max_steps = 0;
+  bad.schedule.max_sweeps = 0;
   CHECK_FALSE(bad.IsValid(&error));
-  CHECK_THAT(error, Contains("max_steps"));
+  CHECK_THAT(error, Contains("max_sweeps"));
+  bad = good;
+  bad.schedule.sweep = {};
+  CHECK_FALSE(bad.IsValid(&error));
+  CHECK_THAT(error, Contains("sweep"));
+  bad = good;
+  bad.schedule.sweep[0].kind = smc::MoveKind::kModel;  // a model move without a name
+  CHECK_FALSE(bad.IsValid(&error));
+  CHECK_THAT(error, Contains("name"));
 
   // A model with another particle count is a usage error naming the stage.
   smc::TemperedSampler sampler(chain_options(32, 1));
@@ -318,4 +326,39 @@ TEST_CASE("each MH step evaluates all proposals of a block in one call", "[smc][
   int sweeps = 0;
   for (const auto& step : s.steps) sweeps += step.mh.sweeps;
   CHECK(model.batched_calls == 2 * sweeps);  // two blocks, one call each per sweep
+}
+
+TEST_CASE("a schedule naming a model move the model lacks is a usage error naming it", "[smc][engine][schedule]") {
+  auto options = chain_options(64, 1);
+  smc::ScheduledMove gibbs;
+  gibbs.kind = smc::MoveKind::kModel;
+  gibbs.model_move = "gibbs on mu";
+  options.schedule.sweep.push_back(gibbs);
+  smc::TemperedSampler sampler(options);
+  GaussianChainModel model(kRecords, 64, sampler.model_rngs());
+  model.add_record(sampler.model_rngs());
+  CHECK_THROWS_WITH(sampler.run_stage(model, "record 0"), Contains("gibbs on mu"));
+}
+
+TEST_CASE("a random walk held back by its acceptance condition is recorded as skipped", "[smc][engine][schedule]") {
+  auto options = chain_options(200, 2);
+  options.schedule = smc::MoveSchedule::ibis_independence(/*max_sweeps=*/6, /*final_sweeps=*/0);
+  options.schedule.trigger = smc::MoveSchedule::Trigger::kEveryStep;
+  smc::TemperedSampler sampler(options);
+  GaussianChainModel model(kRecords, 200, sampler.model_rngs());
+  model.add_record(sampler.model_rngs());
+  const smc::StageSummary s = sampler.run_stage(model, "record 0");
+  for (const auto& step : s.steps) {
+    for (const auto& block : step.mh.block_names) {
+      const smc::MoveRecord* ind = step.mh.find("independence", block);
+      const smc::MoveRecord* walk = step.mh.find("random walk", block);
+      REQUIRE(ind != nullptr);
+      REQUIRE(walk != nullptr);
+      CHECK(ind->runs == step.mh.sweeps);
+      // Each sweep either ran the fallback or held it back, never both, never neither.
+      CHECK(walk->runs + walk->skipped == step.mh.sweeps);
+      // On a Gaussian target the t proposal fitted to the cloud is accepted above 0.3 most of the time.
+      CHECK(ind->acceptance > 0.3);
+    }
+  }
 }

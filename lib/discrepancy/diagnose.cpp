@@ -10,7 +10,8 @@
 #include <sstream>
 
 #include "discrepancy/posterior_draws.hpp"
-#include "fleet/fleet_smc.hpp"
+#include "fleet/online_fit.hpp"
+#include "fleet/replay.hpp"
 #include "model/model_extension.hpp"
 #include "util/errors.hpp"
 
@@ -21,38 +22,43 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-// A fitted SMC together with the extension it points at (which must outlive it).
+// A fitted SMC together with the extension it points at (which must outlive it). The latent
+// core: the checks need every truck's latents, and an extension's ψ rides in its particles.
 struct Fitted {
   std::unique_ptr<fleet::ModelExtension> extension;
-  std::unique_ptr<fleet::FleetSmc> smc;
+  std::unique_ptr<fleet::OnlineFit> online;
   ModelFit fit;
+  const fleet::FleetSmc& smc() const { return *online->latent(); }
 };
 
 Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& records, std::size_t heldout_from,
                  std::unique_ptr<fleet::ModelExtension> extension, const DiagnoseOptions& o) {
   Fitted f;
   f.extension = std::move(extension);
-  fleet::FleetSmc::Options so;
-  so.sampler.particles = o.particles;
-  so.sampler.threads = o.threads;
-  so.sampler.seed = o.seed;
-  so.extension = f.extension.get();
-  f.smc = std::make_unique<fleet::FleetSmc>(site, so);
+  fleet::OnlineFitOptions so;
+  so.core = fleet::OnlineFitOptions::Core::kLatent;
+  so.sampler().particles = o.particles;
+  so.sampler().threads = o.threads;
+  so.sampler().seed = o.seed;
+  so.latent.extension = f.extension.get();
+  f.online = fleet::make_online_fit(site, so);
   const std::string label = f.extension ? f.extension->name() : std::string("base model");
   const auto start = Clock::now();
-  for (std::size_t t = 0; t < records.size(); ++t) {
-    const auto& stage = f.smc->absorb(records[t]);
+  fleet::ReplayOptions replay;  // the stages, then the same final sweeps as `fit --core latent`
+  replay.final_sweeps = o.final_sweeps;
+  replay.after_record = [&](std::size_t t, const smc::StageSummary& stage, const fleet::OnlineFit&) {
     if (t >= heldout_from) f.fit.heldout_log_score += stage.log_evidence_increment;
     if (o.progress && ((t + 1) % 25 == 0 || t + 1 == records.size())) {
       *o.progress << "diagnose: " << label << ": truck " << (t + 1) << "/" << records.size() << ", log evidence "
                   << std::fixed << std::setprecision(1) << stage.log_evidence << ", " << seconds_since(start) << " s\n"
                   << std::defaultfloat;
     }
-  }
-  f.fit.log_evidence = f.smc->sampler().log_evidence();
+  };
+  fleet::replay(*f.online, records, replay);
+  f.fit.log_evidence = f.smc().sampler().log_evidence();
   f.fit.wall_s = seconds_since(start);
-  f.fit.integrator_passes = f.smc->target().integrator_passes();
-  const auto hyper = fleet::summarise_weighted(f.smc->target().theta(), f.smc->sampler().weights());
+  f.fit.integrator_passes = f.smc().target().integrator_passes();
+  const auto hyper = fleet::summarise_weighted(f.smc().target().theta(), f.smc().sampler().weights());
   std::copy(hyper.begin(), hyper.end(), f.fit.hyper.begin());
   return f;
 }
@@ -60,7 +66,7 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
 std::vector<ParameterEstimate> extension_estimates(const Fitted& f) {
   std::vector<ParameterEstimate> out;
   const auto& params = f.extension->parameters();
-  const auto summary = fleet::summarise_weighted(f.smc->target().psi(), f.smc->sampler().weights());
+  const auto summary = fleet::summarise_weighted(f.smc().target().psi(), f.smc().sampler().weights());
   for (std::size_t j = 0; j < params.size(); ++j) out.push_back({params[j].name, params[j].unit, params[j].null_value, summary[j]});
   return out;
 }
@@ -70,7 +76,7 @@ CheckReport check(const site::Site& site, const Fitted& f, const DiagnoseOptions
   co.alpha = o.alpha;
   co.replicates = o.replicates;
   co.seed = o.seed;
-  return run_checks(posterior_draws(site, *f.smc, o.draws, o.seed, o.threads), co);
+  return run_checks(posterior_draws(site, f.smc(), o.draws, o.seed, o.threads), co);
 }
 
 std::vector<std::string> matched_checks(const fleet::ModelExtension& ext, const CheckReport& report) {
@@ -99,6 +105,7 @@ void DiagnoseOptions::validate() const {
   if (!(holdout_fraction > 0.0 && holdout_fraction < 1.0)) throw UsageError("diagnose: holdout fraction must be in (0, 1)");
   if (draws < 10) throw UsageError("diagnose: draws must be at least 10");
   if (replicates < 100) throw UsageError("diagnose: replicates must be at least 100");
+  if (final_sweeps < -1) throw UsageError("diagnose: final sweeps must be >= 0 (or -1 for the default)");
 }
 
 DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRecord>& records, const DiagnoseOptions& o) {
@@ -201,7 +208,7 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
     }
   }
 
-  if (best.smc) {
+  if (best.online) {
     r.description = best.extension->description();
     r.parameters = extension_estimates(best);
     r.chosen = best.fit;

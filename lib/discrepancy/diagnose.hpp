@@ -36,6 +36,9 @@ struct DiagnoseOptions {
   int particles = 512;
   int threads = 1;
   std::uint64_t seed = 1;
+  // Sweeps at phi = 1 after each fit's last truck, as `fit` runs them; -1: the latent core's
+  // schedule (50). The checks then read a posterior of the same quality as `fit --core latent`.
+  int final_sweeps = -1;
   double alpha = 0.01;              // a check fails when its predictive p-value is below this
   double min_log_bayes_factor = 3.0;  // log BF an effect needs (3: "strong", Kass & Raftery 1995)
   double holdout_fraction = 0.25;   // the last quarter of the trucks scores held-out skill

@@ -14,11 +14,8 @@ FleetTarget::Options target_options(const FleetSmc::Options& o) {
   FleetTarget::Options t;
   t.particles = o.sampler.particles;
   t.prior = o.prior;
-  t.older_sweeps = o.older_sweeps;
   t.window = o.window;
   t.extension = o.extension;
-  t.extension_sweeps = o.extension_sweeps;
-  t.extension_jump_sweeps = o.extension_jump_sweeps;
   return t;
 }
 
@@ -26,10 +23,43 @@ FleetTarget::Options target_options(const FleetSmc::Options& o) {
 constexpr std::uint64_t kInitialDraws = 0;
 constexpr std::uint64_t kNewTruckDraws = 1;
 constexpr std::uint64_t kRejuvenationDraws = 2;
+
+smc::TemperedSampler::Options with_schedule(const FleetSmc::Options& o) {
+  smc::TemperedSampler::Options s = o.sampler;
+  s.schedule = FleetSmc::move_schedule(o);
+  return s;
+}
 }  // namespace
 
+smc::MoveSchedule FleetSmc::move_schedule(const Options& o) {
+  if (o.older_sweeps < 0) throw UsageError("fleet SMC: older_sweeps must be >= 0");
+  if (o.extension_sweeps < 0) throw UsageError("fleet SMC: extension_sweeps must be >= 0");
+  if (o.extension_jump_sweeps < 0) throw UsageError("fleet SMC: extension_jump_sweeps must be >= 0");
+  auto model_move = [](std::string_view name, bool at_phi_one, int per_stage) {
+    smc::ScheduledMove m;
+    m.kind = smc::MoveKind::kModel;
+    m.model_move = std::string(name);
+    m.only_at_phi_one = at_phi_one;
+    m.max_runs_per_stage = per_stage;
+    return m;
+  };
+  smc::MoveSchedule s = o.sampler.schedule;
+  s.sweep = {smc::ScheduledMove{}};  // random walk on the newest truck's latents
+  if (o.older_sweeps > 0) s.sweep.push_back(model_move(FleetTarget::kOlderTrucksMove, true, o.older_sweeps));
+  const ModelExtension* e = o.extension;
+  if (e != nullptr && e->edits_forward()) {
+    if (e->jump_draws() > 0 && o.extension_jump_sweeps > 0)
+      s.sweep.push_back(model_move(FleetTarget::kExtensionJumpMove, true, o.extension_jump_sweeps));
+    if (o.extension_sweeps > 0) s.sweep.push_back(model_move(FleetTarget::kExtensionWalkMove, true, o.extension_sweeps));
+  }
+  if (e != nullptr && e->edits_stiffness_distribution())
+    s.sweep.push_back(model_move(FleetTarget::kStiffnessMove, false, -1));
+  s.sweep.push_back(model_move(FleetTarget::kThetaMove, false, -1));
+  return s;
+}
+
 FleetSmc::FleetSmc(const site::Site& site, Options options)
-    : site_(site), target_(site, target_options(options)), sampler_(options.sampler), window_(options.window),
+    : site_(site), target_(site, target_options(options)), sampler_(with_schedule(options)), window_(options.window),
       parallel_(options.sampler.threads) {
   target_.initialise(sampler_.model_rngs().child(kInitialDraws));
 }

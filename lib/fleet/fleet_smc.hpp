@@ -19,28 +19,43 @@ namespace ssrfleet::fleet {
 class FleetSmc {
  public:
   struct Options {
-    // Its `particles` is the particle count P. The sweeps per tempering step are capped at 5:
-    // the new truck's lateral position is multimodal, so the cloud-scaled jump target is seldom
-    // reached by local moves and the cap decides the cost; the particle population, not the
-    // chain, carries the modes.
+    // Its `particles` is the particle count P. Its schedule's trigger (every tempering step), sweep
+    // count and final_sweeps are used as given; its sweep is the one move_schedule() builds from
+    // the counts below. The sweeps per tempering step are capped at 5: the new truck's lateral
+    // position is multimodal, so the cloud-scaled jump target is seldom reached by local moves
+    // and the cap decides the cost; the particle population, not the chain, carries the modes.
+    // final_sweeps = 50: the sweeps of rejuvenate() that an offline replay (`fit`) runs after its
+    // last truck; an online stream keeps the cloud the stages leave (see rejuvenate()).
     smc::TemperedSampler::Options sampler = [] {
       smc::TemperedSampler::Options o;
-      o.mh.max_steps = 5;
+      o.schedule.max_sweeps = 5;
+      o.schedule.final_sweeps = 50;
       return o;
     }();
-    // MH sweeps over all older trucks per stage (FleetTarget). Two keep σ_k and σ_kt within a
-    // quarter posterior sd of a long MCMC on the paper's case; one left them 0.4 sd low.
+    // Runs per stage of the model move "older trucks" (FleetTarget), at φ = 1. Two keep σ_k and
+    // σ_kt within a quarter posterior sd of a long MCMC on the paper's case; one left them 0.4 sd low.
     int older_sweeps = 2;
     PriorBounds prior;
     Eigen::Index window = 0;  // FleetTarget::Options::window: 0 = exact, W = bounded memory
     // FleetTarget::Options::extension: an effect fitted alongside θ (not owned; outlives this).
     const ModelExtension* extension = nullptr;
-    int extension_sweeps = 3;       // FleetTarget::Options::extension_sweeps
-    int extension_jump_sweeps = 1;  // FleetTarget::Options::extension_jump_sweeps
-    // Sweeps of rejuvenate() that an offline replay (`fit`) runs after its last truck. Not used by
-    // absorb(): an online stream keeps the cloud the stages leave. See rejuvenate() for the count.
-    int final_sweeps = 50;
+    // Runs per stage of "extension random walk", at φ = 1. Three, not two: on a 10 mm bump
+    // (diagnose_test) two left the cloud lagging along the length-height ridge, the bump too long
+    // and too low, its 95 % interval missing the truth.
+    int extension_sweeps = 3;
+    // Runs per stage of "extension jump" (an extension with a jump), at φ = 1. The random walk,
+    // scaled on the cloud, cannot reach a mode the cloud lost while early trucks favoured another;
+    // with the jump, a particle that reaches it is then favoured by the reweighting of each later truck.
+    int extension_jump_sweeps = 1;
   };
+
+  // The latent core's sweep, in order: a random walk on the newest truck's latents (the engine's
+  // block); "older trucks" (φ = 1, older_sweeps per stage); with an extension that moves the
+  // forward model, "extension jump" (φ = 1, extension_jump_sweeps per stage, if it has a jump) and
+  // "extension random walk" (φ = 1, extension_sweeps per stage); with one that replaces the
+  // stiffness distribution, "stiffness distribution"; then "theta". The rest of options.sampler's
+  // schedule (trigger, sweep counts, final_sweeps) is kept.
+  static smc::MoveSchedule move_schedule(const Options& options);
 
   // UsageError on invalid options (the sampler's IsValid message).
   FleetSmc(const site::Site& site, Options options);

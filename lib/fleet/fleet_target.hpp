@@ -6,10 +6,10 @@
 // so far, with each truck's sum of squared residuals cached so θ moves need no integrator call.
 // When truck n+1 arrives (add_truck), every particle is extended with latents drawn from
 // p(x | θ), so the stage's incremental weight is the new truck's likelihood alone; the engine
-// tempers it in. The engine's random-walk MH block is the new truck's latents; θ moves by Gibbs
-// and exact independence MH (custom_moves). Once the new truck is fully in (φ = 1), every older
-// truck's latents get `older_sweeps` random-walk MH sweeps, all trucks and particles in one
-// batched integrator call: the trucks are conditionally independent given θ, so this is one
+// tempers it in. The engine's random-walk MH block is the new truck's latents; the model's own
+// moves (model_moves; FleetSmc's schedule says when each runs) are θ by Gibbs and exact
+// independence MH, and, once the new truck is fully in (φ = 1), a few random-walk MH sweeps over
+// every older truck's latents, all trucks and particles in one batched integrator call: the trucks are conditionally independent given θ, so this is one
 // Metropolis-within-Gibbs sweep per particle, and it keeps older trucks' paths from collapsing
 // onto a few ancestors (path degeneracy) at a cost of n passes per particle per truck.
 //
@@ -21,6 +21,8 @@
 
 #include <cstdint>
 #include <deque>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -39,29 +41,21 @@ class FleetTarget final : public smc::TemperedModel {
   struct Options {
     Eigen::Index particles = 1024;
     PriorBounds prior;
-    int older_sweeps = 2;  // MH sweeps over every older truck's latents per stage; 0 = off
     // Bounded memory: keep the latents of only the newest `window` older trucks per particle;
     // an older truck leaving the window is folded into per-particle sufficient statistics
     // (Σk, Σk², Σk_t, Σk_t², Σz, Σz², ΣSSR) and its latents are frozen from then on. 0 = exact
     // (every truck's latents kept and moved, memory growing with the stream).
     Eigen::Index window = 0;
     // An optional model extension (DESIGN.md §6): its parameters ψ join θ in every particle,
-    // drawn from their prior before the first truck, and move once the new truck is fully in by
-    // `extension_sweeps` random-walk MH sweeps per stage, each re-simulating every kept truck
-    // (n passes per particle). An extension that replaces the fleet's stiffness distribution
-    // (second_class) changes the density of every truck's k instead, and (K, σ_k, ψ) move by a
+    // drawn from their prior before the first truck, and move by the model moves "extension jump"
+    // (the extension's own jump between distant modes, ModelExtension::jump, if it has one) and
+    // "extension random walk", each sweep re-simulating every kept truck (n passes per particle).
+    // An extension that replaces the fleet's stiffness distribution (second_class) changes the
+    // density of every truck's k instead, and (K, σ_k, ψ) move by "stiffness distribution", a
     // random walk on their conditional, with no integrator call. Needs the exact regime
     // (window 0): a retired truck's residuals cannot be recomputed at a new ψ. Not owned; must
     // outlive the target.
     const ModelExtension* extension = nullptr;
-    // Three, not two: on a 10 mm bump (diagnose_test) two left the cloud lagging along the
-    // length-height ridge, the bump too long and too low, its 95 % interval missing the truth.
-    int extension_sweeps = 3;
-    // Before those, this many MH sweeps per stage of the extension's own jump between distant
-    // modes (ModelExtension::jump), if it has one. The random walk, scaled on the cloud, cannot
-    // reach a mode the cloud lost while early trucks favoured another; with the jump, a particle
-    // that reaches it is then favoured by the reweighting of each later truck.
-    int extension_jump_sweeps = 1;
   };
 
   FleetTarget(const site::Site& site, Options options);
@@ -115,15 +109,31 @@ class FleetTarget final : public smc::TemperedModel {
   void accept(int block, const std::vector<char>& accepted,
               const Eigen::Ref<const Eigen::MatrixXd>& proposed) override;
   void resample(const std::vector<Eigen::Index>& ancestors) override;
-  // θ given the latents: exact Gibbs draws of K, sigma_k, K_t, sigma_kt and sigma_IF (their
-  // conditionals stay standard under the uniform box, truncated_samplers.hpp), and for Z and
-  // sigma_z an independence MH whose proposal is their conditional without the road truncation.
-  void custom_moves(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
-                    Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) override;
+  // The model moves, by name (in model_moves() order):
+  //   "older trucks"            one MH sweep over every older kept truck's latents (φ = 1 only in
+  //                             FleetSmc's schedule), a random walk on (k, k_t, z) on even runs of a
+  //                             stage and an independence proposal of (k, k_t) from p(· | θ) on odd;
+  //   "extension jump"          ψ by the extension's jump (with an extension that has one);
+  //   "extension random walk"   ψ by a random walk scaled on the cloud;
+  //   "stiffness distribution"  (K, σ_k, ψ) of an extension's stiffness distribution;
+  //   "theta"                   θ given the latents: exact Gibbs draws of K, sigma_k, K_t, sigma_kt
+  //                             and sigma_IF (their conditionals stay standard under the uniform
+  //                             box, truncated_samplers.hpp), and for Z and sigma_z an independence
+  //                             MH whose proposal is their conditional without the road truncation.
+  // A move with nothing to do (no older truck yet, no extension) reports that it did not run.
+  static constexpr std::string_view kOlderTrucksMove = "older trucks";
+  static constexpr std::string_view kExtensionJumpMove = "extension jump";
+  static constexpr std::string_view kExtensionWalkMove = "extension random walk";
+  static constexpr std::string_view kStiffnessMove = "stiffness distribution";
+  static constexpr std::string_view kThetaMove = "theta";
+  std::vector<std::string> model_moves() const override;
+  ModelMoveResult run_model_move(int move, int run_in_stage, double phi, const smc::RngFactory& rngs,
+                                 const smc::ParallelFor& parallel, Eigen::Ref<Eigen::ArrayXd> log_base,
+                                 Eigen::Ref<Eigen::ArrayXd> loglik) override;
 
   // Rejuvenation at the end of a replay: `sweeps` Metropolis-within-Gibbs sweeps at φ = 1 over
   // every kept truck's latents (the newest included), alternating the random walk and the
-  // independence proposal from p(k, k_t | θ) as the stages do, then θ (and ψ) as in custom_moves.
+  // independence proposal from p(k, k_t | θ) as the stages do, then ψ and θ as the model moves do.
   // Each sweep costs n passes per particle. It leaves the posterior and the weights as they are
   // and only undoes the ancestry the particles share: the stages refresh older trucks twice per
   // truck, so after the last few resamplings many particles still carry the same latents for
@@ -167,7 +177,7 @@ class FleetTarget final : public smc::TemperedModel {
   // rejuvenate); scales[j] is truck j's adapted proposal multiplier, updated here.
   void older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel, bool stiffness_from_prior,
                           Eigen::Index swept, std::vector<double>& scales);
-  // θ given the latents (the Gibbs and independence MH draws of custom_moves), at temperature φ
+  // θ given the latents (the Gibbs and independence MH draws of the "theta" move), at temperature φ
   // for the newest truck's likelihood; writes every particle's log γ and ℓ.
   void theta_moves(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
                    Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik);
@@ -202,10 +212,8 @@ class FleetTarget final : public smc::TemperedModel {
   Eigen::Index total_trucks_ = 0;
   std::deque<double> pool_speed_mps_, pool_sprung_mass_kg_;
   Eigen::ArrayXd proposed_ssr_;       // SSR at the last proposals of the newest truck's block
-  int older_sweeps_done_ = 0;         // in the current stage
   std::vector<double> older_scale_;   // per older truck: adapted proposal multiplier
   double older_acceptance_ = 0.0;     // of the last older-trucks sweep
-  int extension_sweeps_done_ = 0;     // in the current stage
   double extension_scale_ = 1.0;      // adapted proposal multiplier of the ψ random walk
   double extension_acceptance_ = 0.0; // of the last ψ sweep
   double stiffness_scale_ = 1.0;      // adapted proposal multiplier of the (K, σ_k, ψ) random walk

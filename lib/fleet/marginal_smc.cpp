@@ -44,10 +44,7 @@ smc::StageSummary MarginalSmc::absorb(const records::WimRecord& record) {
 smc::MhSummary MarginalSmc::rejuvenate(int sweeps) {
   if (sweeps < 0) throw UsageError("MarginalSmc::rejuvenate: sweeps must be >= 0");
   if (sweeps == 0) return {};
-  smc::MhOptions mh = options_.sampler.mh;
-  mh.min_steps = sweeps;
-  mh.max_steps = sweeps;
-  return sampler_.move(target_, "final rejuvenation", mh);
+  return sampler_.move(target_, "final rejuvenation", sweeps);
 }
 
 PosteriorCloud MarginalSmc::cloud() const {

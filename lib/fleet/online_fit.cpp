@@ -45,6 +45,7 @@ class LatentFit final : public CoreFit<FleetSmc> {
  public:
   using CoreFit::CoreFit;
   std::string core() const override { return "latent"; }
+  const FleetSmc* latent() const override { return &smc_; }
 };
 
 }  // namespace

@@ -1,4 +1,5 @@
-// One driver shape for every command that feeds trucks to a sampler (fit, stream, reproduce):
+// One driver shape for every command that feeds trucks to a sampler (fit, stream, reproduce,
+// diagnose; the offline ones through replay.hpp):
 // absorb a record, rejuvenate after an offline replay, hand out the posterior, checkpoint. Two
 // cores implement it:
 //   marginal (default)  MarginalSmc: IBIS over θ with each truck's latents integrated out in a
@@ -35,6 +36,9 @@ class OnlineFit {
   virtual void save(BinaryWriter& out) const = 0;
   virtual void restore(BinaryReader& in) = 0;
   virtual std::string core() const = 0;  // "marginal" or "latent"
+  // The latent core itself, for what only it has (every truck's latents, an extension's ψ);
+  // nullptr for the marginal core.
+  virtual const FleetSmc* latent() const { return nullptr; }
   // A line for progress output after absorb(): what the last record cost beyond its stage.
   virtual std::string note() const { return ""; }
 
@@ -55,7 +59,9 @@ struct OnlineFitOptions {
   FleetSmc::Options latent;
   // The sampler options shared by both (particles, threads, seed): copied into the chosen core's.
   smc::TemperedSampler::Options& sampler() { return core == Core::kMarginal ? marginal.sampler : latent.sampler; }
-  int default_final_sweeps() const { return core == Core::kMarginal ? marginal.final_sweeps : latent.final_sweeps; }
+  int default_final_sweeps() const {
+    return core == Core::kMarginal ? marginal.sampler.schedule.final_sweeps : latent.sampler.schedule.final_sweeps;
+  }
 };
 
 // UsageError if the options are invalid.

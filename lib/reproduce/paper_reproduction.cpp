@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "fleet/online_fit.hpp"
+#include "fleet/replay.hpp"
 #include "fleet/simulator.hpp"
 #include "io/atomic_file.hpp"
 #include "model/fleet_distribution.hpp"
@@ -72,11 +73,10 @@ fleet::PosteriorCloud stream_fit(const site::Site& site, const std::vector<recor
   std::string why;
   if (!so.sampler().IsValid(&why)) throw UsageError(why);
   const auto fit = fleet::make_online_fit(site, so);
-  fleet::OnlineFit& smc = *fit;
   const auto start = Clock::now();
   const std::size_t every = records.size() <= 20 ? 1 : 10;
-  for (std::size_t t = 0; t < records.size(); ++t) {
-    smc.absorb(records[t]);
+  fleet::ReplayOptions replay;  // the same final sweeps as `fit`: a posterior of the same quality
+  replay.after_record = [&](std::size_t t, const smc::StageSummary&, const fleet::OnlineFit& smc) {
     if (after_each) after_each(t, smc);
     if (o.progress && ((t + 1) % every == 0 || t + 1 == records.size())) {
       *o.progress << "reproduce: " << label << ": truck " << (t + 1) << "/" << records.size() << ", ESS "
@@ -84,10 +84,9 @@ fleet::PosteriorCloud stream_fit(const site::Site& site, const std::vector<recor
                   << std::setprecision(1) << seconds_since(start) << " s\n"
                   << std::defaultfloat;
     }
-  }
-  // The same final rejuvenation as `fit`, so the figures come from a posterior of the same quality.
-  smc.rejuvenate(so.default_final_sweeps());
-  return smc.cloud();
+  };
+  fleet::replay(*fit, records, replay);
+  return fit->cloud();
 }
 
 std::array<fleet::ParameterSummary, fleet::kHyperCount> summarise(const fleet::PosteriorCloud& c) {

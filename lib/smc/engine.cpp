@@ -45,12 +45,14 @@ bool TemperedSampler::Options::IsValid(std::string* error) const {
   SMC_OPTION_RULE(tempering.max_bisections >= 1, "tempering.max_bisections must be >= 1");
   SMC_OPTION_RULE(tempering.min_step > 0.0 && tempering.min_step < 1.0, "tempering.min_step must be in (0, 1)");
   SMC_OPTION_RULE(mh.scale > 0.0 && std::isfinite(mh.scale), "mh.scale must be positive");
-  SMC_OPTION_RULE(mh.jump_target > 0.0 && mh.jump_target <= 1.0, "mh.jump_target must be in (0, 1]");
-  SMC_OPTION_RULE(mh.min_steps >= 1, "mh.min_steps must be >= 1");
-  SMC_OPTION_RULE(mh.max_steps >= mh.min_steps, "mh.max_steps must be >= mh.min_steps");
   SMC_OPTION_RULE(mh.independence_df > 0.0, "mh.independence_df must be positive");
   SMC_OPTION_RULE(mh.independence_inflation > 0.0 && std::isfinite(mh.independence_inflation),
                   "mh.independence_inflation must be positive");
+  std::string schedule_error;
+  if (!schedule.IsValid(&schedule_error)) {
+    if (error) *error = "TemperedSampler::Options: " + schedule_error;
+    return false;
+  }
   if (error) error->clear();
   return true;
 }
@@ -114,6 +116,7 @@ StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view l
     }
   }
 
+  std::vector<int> runs_in_stage;  // per schedule entry (MoveSchedule::max_runs_per_stage)
   double phi = 0.0;
   for (int step = 0; phi < 1.0; ++step) {
     StepInfo info;
@@ -153,10 +156,12 @@ StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view l
     }
 
     // 4. move at the new temperature (IBIS: only once resampling has duplicated particles).
-    if (options_.move_policy == Options::MovePolicy::kEveryStep || info.resampled) {
-      info.mh = mh_moves(model, phi, Wnew, log_base, loglik,
-                         root_.child(kMove, stage_key, static_cast<std::uint64_t>(step)), parallel_, options_.mh, label);
-      check_loglik(loglik, label);  // custom moves may have written the cache
+    const MoveSchedule& schedule = options_.schedule;
+    if (schedule.trigger == MoveSchedule::Trigger::kEveryStep || info.resampled) {
+      info.mh = run_sweeps(model, phi, Wnew, log_base, loglik,
+                           root_.child(kMove, stage_key, static_cast<std::uint64_t>(step)), parallel_, options_.mh,
+                           schedule, schedule.min_sweeps, schedule.max_sweeps, runs_in_stage, label);
+      check_loglik(loglik, label);  // model moves may have written the cache
     }
 
     summary.steps.push_back(info);
@@ -176,17 +181,19 @@ StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view l
   return summary;
 }
 
-MhSummary TemperedSampler::move(TemperedModel& model, std::string_view label, const MhOptions& mh) {
+MhSummary TemperedSampler::move(TemperedModel& model, std::string_view label, int sweeps) {
   const Eigen::Index P = options_.particles;
   if (model.particles() != P) throw UsageError("TemperedSampler::move: the model's particle count differs from options.particles");
+  if (sweeps < 1) throw UsageError("TemperedSampler::move: sweeps must be >= 1");
   Eigen::ArrayXd log_base(P), loglik(P);
   model.log_density(log_base, loglik, parallel_);
   check_loglik(loglik, label);
   const Eigen::ArrayXd W = log_weights_.exp();
-  const MhSummary s = mh_moves(model, 1.0, W, log_base, loglik,
-                               root_.child(kStandaloneMove, static_cast<std::uint64_t>(stages_run_),
-                                           static_cast<std::uint64_t>(moves_run_)),
-                               parallel_, mh, label);
+  std::vector<int> runs;  // a call of its own: per-stage limits count from zero
+  const MhSummary s = run_sweeps(model, 1.0, W, log_base, loglik,
+                                 root_.child(kStandaloneMove, static_cast<std::uint64_t>(stages_run_),
+                                             static_cast<std::uint64_t>(moves_run_)),
+                                 parallel_, options_.mh, options_.schedule, sweeps, sweeps, runs, label);
   ++moves_run_;
   return s;
 }
@@ -208,18 +215,20 @@ std::string StageSummary::BriefReport() const {
 std::string StageSummary::FullReport() const {
   std::ostringstream os;
   os << BriefReport() << "\n";
-  os << "  step       phi    delta_phi  rCESS    ESS  resampled  logZ_inc  sweeps  acceptance/jump per block\n";
+  os << "  step       phi    delta_phi  rCESS    ESS  resampled  logZ_inc  sweeps  moves (runs, acceptance), jump per block\n";
   for (const auto& s : steps) {
     os << "  " << std::setw(4) << s.step << "  " << std::setw(9) << std::setprecision(6) << s.phi << "  "
        << std::setw(10) << std::setprecision(4) << s.delta_phi << "  " << std::setw(5) << std::setprecision(3)
        << s.relative_cess << "  " << std::setw(6) << std::setprecision(5) << s.ess << "  " << std::setw(9)
        << (s.resampled ? "yes" : "no") << "  " << std::setw(8) << std::setprecision(5)
        << s.log_evidence_increment << "  " << std::setw(6) << s.mh.sweeps;
-    for (std::size_t b = 0; b < s.mh.block_names.size(); ++b) {
-      os << "  " << s.mh.block_names[b] << " " << std::setprecision(3) << s.mh.acceptance[b] << "/" << s.mh.jump[b];
-      if (b < s.mh.independence_acceptance.size() && s.mh.independence_acceptance[b] >= 0.0)
-        os << " (independence " << s.mh.independence_acceptance[b] << ", " << s.mh.random_walk_steps[b] << " rw)";
+    for (const MoveRecord& m : s.mh.moves) {
+      if (m.runs == 0) continue;
+      os << "  " << m.move << (m.block.empty() ? "" : " " + m.block) << " x" << m.runs;
+      if (!std::isnan(m.acceptance)) os << " " << std::setprecision(3) << m.acceptance;
     }
+    for (std::size_t b = 0; b < s.mh.block_names.size(); ++b)
+      os << "  jump " << s.mh.block_names[b] << " " << std::setprecision(3) << s.mh.jump[b];
     os << "\n";
   }
   return os.str();

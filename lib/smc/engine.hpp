@@ -3,9 +3,8 @@
 //   1. choose φ' by bisection so the relative conditional ESS of the step is cess_target;
 //   2. reweight, log w_i += (φ' - φ) ℓ_i; the log-evidence increment is log Σ W_i e^{(φ'-φ) ℓ_i};
 //   3. resample (ancestors from one stream) if ESS < ess_rmin · P; otherwise carry the weights;
-//   4. move every particle with the MH blocks (and the model's custom moves) at φ', which
-//      leaves π_φ' invariant, so the weighted cloud stays a valid sample whether or not step 3
-//      resampled.
+//   4. move every particle by the schedule's sweeps (move_schedule.hpp) at φ', which leave π_φ'
+//      invariant, so the weighted cloud stays a valid sample whether or not step 3 resampled.
 // Weights carry over from one stage to the next, so a sequence of stages (one per record) is
 // IBIS with tempering, and the stage increments sum to log p(y_1:n).
 //
@@ -30,6 +29,7 @@
 #include <Eigen/Core>
 
 #include "smc/mh_kernel.hpp"
+#include "smc/move_schedule.hpp"
 #include "smc/parallel.hpp"
 #include "smc/resampling.hpp"
 #include "smc/rng.hpp"
@@ -76,15 +76,10 @@ class TemperedSampler {
     // Resample when ESS < ess_rmin · P (particles' ESSrmin); 0 never resamples, 1 always.
     double ess_rmin = 0.5;
     ResamplingScheme resampling = ResamplingScheme::systematic;
-    // When the MCMC moves run within a stage. kEveryStep moves after every tempering step (a
-    // latent-variable target whose newest latents need moving); kAfterResampling moves only when
-    // the step resampled, which is IBIS (Chopin 2002): a target whose only coordinates are static
-    // parameters needs rejuvenating only once resampling has duplicated particles, and the number
-    // of move phases then grows like log n, not n.
-    enum class MovePolicy { kEveryStep, kAfterResampling };
-    MovePolicy move_policy = MovePolicy::kEveryStep;
+    // Which moves run, and when (move_schedule.hpp): the one place to read it.
+    MoveSchedule schedule;
     TemperingOptions tempering;  // cess_target (default 0.9) and the bisection
-    MhOptions mh;                // proposal scale and the number of MCMC sweeps
+    MhOptions mh;                // how the block moves propose
     ProgressCallback progress;   // called after every step if set; the library prints nothing
 
     // Checks read as rules; false with a message naming the option and the rule.
@@ -102,10 +97,11 @@ class TemperedSampler {
   // resamples and moves like any stage, but its increment is not added to log_evidence().
   StageSummary run_stage(TemperedModel& model, std::string_view label, bool counts_as_evidence = true);
 
-  // MCMC sweeps at φ = 1 on the current cloud, outside any stage (e.g. rejuvenation after the last
-  // record): leaves the target and the weights unchanged. Random streams are keyed by the stage
-  // count and a per-call counter, so call it between stages only. Returns what the sweeps did.
-  MhSummary move(TemperedModel& model, std::string_view label, const MhOptions& mh);
+  // Exactly `sweeps` sweeps of the schedule at φ = 1 on the current cloud, outside any stage (the
+  // schedule's final_sweeps after the last record): leaves the target and the weights unchanged.
+  // Random streams are keyed by the stage count and a per-call counter, so call it between stages
+  // only. Returns what the sweeps did.
+  MhSummary move(TemperedModel& model, std::string_view label, int sweeps);
 
   // Streams for the model's own draws before stage `stages_run()` (prior draws, new latents):
   // use model_rngs().stream(i) for particle i. Disjoint from the engine's streams.

@@ -15,6 +15,8 @@
 // the terms of blocks not being moved, or the cache goes stale between blocks).
 #pragma once
 
+#include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -65,12 +67,25 @@ class TemperedModel {
   // New particle i becomes a copy of old particle ancestors[i].
   virtual void resample(const std::vector<Eigen::Index>& ancestors) = 0;
 
-  // Optional moves that leave π_φ invariant (Gibbs, model-specific MH), run once per MCMC sweep
-  // after the RW-MH blocks. Draw from rngs.stream(i) for particle i (never from a shared
-  // generator) to stay reproducible across thread counts. A model that moves particle i must
-  // update log_base[i] and loglik[i] to the new state.
-  virtual void custom_moves(double /*phi*/, const RngFactory& /*rngs*/, const ParallelFor& /*parallel*/,
-                            Eigen::Ref<Eigen::ArrayXd> /*log_base*/, Eigen::Ref<Eigen::ArrayXd> /*loglik*/) {}
+  // The model's own moves that leave π_φ invariant (Gibbs draws, a model-specific MH), by name.
+  // None runs unless the sampler's MoveSchedule lists it; the schedule says when.
+  virtual std::vector<std::string> model_moves() const { return {}; }
+
+  struct ModelMoveResult {
+    bool ran = true;  // false: nothing to move (e.g. no older record yet); recorded as skipped
+    double acceptance = std::numeric_limits<double>::quiet_NaN();  // share accepted; NaN for Gibbs
+  };
+  // Runs model move `move` (an index into model_moves()) once over every particle at φ.
+  // run_in_stage counts its earlier runs in this stage (a move may alternate proposals by it).
+  // Draw from a child of `rngs` keyed by the move (distinct keys for distinct moves) and per
+  // particle i from its stream(i), never from a shared generator, to stay reproducible across
+  // thread counts. A move that changes particle i must update log_base[i] and loglik[i].
+  virtual ModelMoveResult run_model_move(int move, int /*run_in_stage*/, double /*phi*/, const RngFactory& /*rngs*/,
+                                         const ParallelFor& /*parallel*/, Eigen::Ref<Eigen::ArrayXd> /*log_base*/,
+                                         Eigen::Ref<Eigen::ArrayXd> /*loglik*/) {
+    throw std::logic_error("TemperedModel::run_model_move: model move " + std::to_string(move) +
+                           " does not exist (model_moves() lists none)");
+  }
 };
 
 }  // namespace ssrfleet::smc

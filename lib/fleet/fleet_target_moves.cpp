@@ -1,0 +1,366 @@
+// The latent core's model moves (FleetTarget::model_moves): θ given the latents, the older trucks'
+// latents, an extension's ψ and stiffness distribution; and the final rejuvenation sweeps. The
+// schedule that says when each runs is FleetSmc::move_schedule; the densities are fleet_target.cpp's.
+#include "fleet/fleet_target.hpp"
+#include "fleet/fleet_target_draws.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <Eigen/Cholesky>
+
+#include "model/extended_forward.hpp"
+#include "model/truncated_samplers.hpp"
+#include "smc/mh_kernel.hpp"
+#include "smc/rng.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::fleet {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}  // namespace
+
+using detail::standard_normal;
+
+std::vector<std::string> FleetTarget::model_moves() const {
+  return {std::string(kOlderTrucksMove), std::string(kExtensionJumpMove), std::string(kExtensionWalkMove),
+          std::string(kStiffnessMove), std::string(kThetaMove)};
+}
+
+smc::TemperedModel::ModelMoveResult FleetTarget::run_model_move(int move, int run_in_stage, double phi,
+                                                                const smc::RngFactory& rngs,
+                                                                const smc::ParallelFor& parallel,
+                                                                Eigen::Ref<Eigen::ArrayXd> log_base,
+                                                                Eigen::Ref<Eigen::ArrayXd> loglik) {
+  // Each move draws from its own child of rngs (the keys predate the schedule: same bits).
+  const bool extension_moves_forward = options_.extension != nullptr && options_.extension->edits_forward();
+  switch (move) {
+    case 0:  // older trucks
+      if (kept_trucks() < 2) return {false};
+      // Alternate a random walk on (k, k_t, z) with an independence proposal of (k, k_t) from
+      // p(k, k_t | θ): one truck's data say little about its stiffnesses, so the prior proposal
+      // is accepted often and moves them across their whole range, which the spread parameters
+      // σ_k and σ_kt need (a random walk alone left them 0.4 posterior sd off a long MCMC).
+      older_trucks_sweep(rngs.child(1), parallel, run_in_stage % 2 == 1, kept_trucks() - 1, older_scale_);
+      return {true, older_acceptance_};
+    case 1:  // extension jump
+      if (!extension_moves_forward || options_.extension->jump_draws() == 0) return {false};
+      extension_sweep(rngs.child(3), parallel, PsiMove::kJump);
+      return {true, extension_jump_acceptance_};
+    case 2:  // extension random walk
+      if (!extension_moves_forward) return {false};
+      extension_sweep(rngs.child(2), parallel, PsiMove::kRandomWalk);
+      return {true, extension_acceptance_};
+    case 3:  // stiffness distribution
+      if (!stiffness_edited()) return {false};
+      stiffness_distribution_sweep(rngs.child(4), parallel);
+      return {true, stiffness_acceptance_};
+    case 4:  // theta
+      theta_moves(phi, rngs.child(0), parallel, log_base, loglik);
+      return {true};
+    default:
+      throw UsageError("fleet target: no model move " + std::to_string(move));
+  }
+}
+
+void FleetTarget::rejuvenate(int sweeps, const smc::RngFactory& rngs, const smc::ParallelFor& parallel) {
+  if (sweeps < 0) throw UsageError("fleet target: rejuvenation sweeps must be >= 0");
+  if (kept_trucks() == 0) return;
+  // The newest truck's proposal scale starts at 1 and adapts within this call; the older ones
+  // carry on from the stages.
+  std::vector<double> scales = older_scale_;
+  scales.push_back(1.0);
+  Eigen::ArrayXd log_base(options_.particles), loglik(options_.particles);  // not needed after φ = 1
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    const smc::RngFactory r = rngs.child(static_cast<std::uint64_t>(sweep));
+    older_trucks_sweep(r.child(1), parallel, sweep % 2 == 1, kept_trucks(), scales);
+    if (options_.extension != nullptr && options_.extension->edits_forward()) {
+      extension_sweep(r.child(2), parallel, PsiMove::kRandomWalk);
+    }
+    if (stiffness_edited()) stiffness_distribution_sweep(r.child(4), parallel);
+    theta_moves(1.0, r.child(0), parallel, log_base, loglik);
+  }
+  scales.pop_back();
+  older_scale_ = scales;
+}
+
+void FleetTarget::theta_moves(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
+                              Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) {
+  const Eigen::Index newest = kept_trucks() - 1;
+  const double n_all = static_cast<double>(trucks());  // the newest truck's latents are in γ in full
+  const auto& prior = options_.prior;
+  parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+      HyperVector t = theta_of(i);
+      const double* s = sums_.col(i).data();
+      const double* x = latents_.col(i).data() + 3 * newest;
+      // Sums over all n+1 latents (older ones from the running sums, plus the newest).
+      const double sk = s[kSumK] + x[kStiffness], sk2 = s[kSumK2] + x[kStiffness] * x[kStiffness];
+      const double skt = s[kSumKt] + x[kTyreStiffness], skt2 = s[kSumKt2] + x[kTyreStiffness] * x[kTyreStiffness];
+      // (K, σ_k) have standard conditionals only under the base model's N(K, σ_k²); an extension's
+      // stiffness distribution moves them in stiffness_distribution_sweep instead.
+      if (!stiffness_edited()) t[kK] = draw_truncated_normal(rng, sk / n_all, t[kSigmaK] / std::sqrt(n_all), prior.lo[kK], prior.hi[kK]);
+      t[kKt] = draw_truncated_normal(rng, skt / n_all, t[kSigmaKt] / std::sqrt(n_all), prior.lo[kKt], prior.hi[kKt]);
+      if (trucks() >= 2) {
+        const double ssk = std::max(0.0, sk2 - 2.0 * t[kK] * sk + n_all * t[kK] * t[kK]);
+        const double sskt = std::max(0.0, skt2 - 2.0 * t[kKt] * skt + n_all * t[kKt] * t[kKt]);
+        if (!stiffness_edited()) t[kSigmaK] = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), ssk, prior.lo[kSigmaK], prior.hi[kSigmaK]);
+        t[kSigmaKt] = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), sskt, prior.lo[kSigmaKt], prior.hi[kSigmaKt]);
+      }
+      // (Z, σ_z): the Gaussian part of their conditional is standard; the truncation to the road
+      // adds m(Z, σ_z)^-N (m = the road's share of N(Z, σ_z²)). Propose from the Gaussian part
+      // on the prior box and accept with the ratio of m^-N: exact MH, accepting almost always.
+      const double sz = s[kSumZ] + x[kLateral], sz2 = s[kSumZ2] + x[kLateral] * x[kLateral];
+      const auto log_mass = [&](double mean, double sd) {
+        return log_normal_mass(lateral_.lo_m, lateral_.hi_m, mean, sd);
+      };
+      {
+        const double z_new = draw_truncated_normal(rng, sz / n_all, t[kSigmaZ] / std::sqrt(n_all), prior.lo[kZ], prior.hi[kZ]);
+        const double log_accept = n_all * (log_mass(t[kZ], t[kSigmaZ]) - log_mass(z_new, t[kSigmaZ]));
+        if (std::log(uniform_open01(rng)) < log_accept) t[kZ] = z_new;
+      }
+      if (trucks() >= 2) {
+        const double ssz = std::max(0.0, sz2 - 2.0 * t[kZ] * sz + n_all * t[kZ] * t[kZ]);
+        const double sd_new = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), ssz, prior.lo[kSigmaZ], prior.hi[kSigmaZ]);
+        const double log_accept = n_all * (log_mass(t[kZ], t[kSigmaZ]) - log_mass(t[kZ], sd_new));
+        if (std::log(uniform_open01(rng)) < log_accept) t[kSigmaZ] = sd_new;
+      }
+      // σ_IF: older trucks' likelihoods count in full, the newest one's at power φ, so the
+      // precision is Gamma((M(n+φ) - 1)/2, (ΣSSR + φ SSR_new)/2) on the box.
+      const double ssr_new = ssr_(newest, i);
+      if (std::isfinite(ssr_new) && std::isfinite(s[kSumSsr])) {
+        const double a = sensors_ * (n_all - 1.0 + phi);
+        const double shape = 0.5 * (a - 1.0), rate = 0.5 * (s[kSumSsr] + phi * ssr_new);
+        if (shape > 0.0 && rate > 0.0) {
+          const double lo_sd = prior.lo[kSigmaIf], hi_sd = prior.hi[kSigmaIf];
+          const double tau = draw_truncated_gamma(rng, shape, rate, 1.0 / (hi_sd * hi_sd), 1.0 / (lo_sd * lo_sd));
+          t[kSigmaIf] = std::clamp(1.0 / std::sqrt(tau), lo_sd, hi_sd);
+        }
+      }
+      for (int j = 0; j < kHyperCount; ++j) theta_(j, i) = t[j];
+      log_base[i] = base_density(i, t, x);
+      loglik[i] = newest_loglik(ssr_new, t[kSigmaIf]);
+    }
+  });
+}
+
+void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
+                                     bool stiffness_from_prior, Eigen::Index swept, std::vector<double>& scales) {
+  const Eigen::Index P = options_.particles, older = swept;
+  // Per truck: a proposal from the particle cloud's spread of that truck's latents (equal
+  // weights: this runs right after a stage, whatever the weights), scaled by 2.38/√3 and by a
+  // multiplier adapted on acceptance from stage to stage.
+  std::vector<Eigen::Matrix3d> chol(static_cast<std::size_t>(older));
+  const Eigen::ArrayXd equal = Eigen::ArrayXd::Constant(P, 1.0);
+  for (Eigen::Index j = 0; j < older; ++j) {
+    const Eigen::MatrixXd x = latents_.middleRows(3 * j, 3);
+    const Eigen::VectorXd mean = x.rowwise().mean();
+    const Eigen::MatrixXd centred = x.colwise() - mean;
+    Eigen::Matrix3d cov = centred * centred.transpose() / static_cast<double>(P);
+    // A ridge keeps a collapsed coordinate movable: 1e-6 of the prior scale of each latent.
+    cov.diagonal() += Eigen::Vector3d(1e-6 * 5e4, 1e-6 * 2e5, 1e-6 * 0.5).array().square().matrix();
+    const double scale = scales[static_cast<std::size_t>(j)] * 2.38 / std::sqrt(3.0);
+    chol[static_cast<std::size_t>(j)] = Eigen::LLT<Eigen::Matrix3d>(cov).matrixL();
+    chol[static_cast<std::size_t>(j)] *= scale;
+  }
+  // Proposals: particle i's draws come from its own stream, truck by truck in order.
+  Eigen::MatrixXd proposals(3 * older, P);
+  Eigen::ArrayXd log_u(older * P);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+      const HyperVector t = theta_of(i);
+      for (Eigen::Index j = 0; j < older; ++j) {
+        if (stiffness_from_prior) {
+          proposals(3 * j + kStiffness, i) = draw_stiffness(rng, t, psi_.col(i).data());
+          proposals(3 * j + kTyreStiffness, i) = t[kKt] + t[kSigmaKt] * standard_normal(rng);
+          proposals(3 * j + kLateral, i) = latents_(3 * j + kLateral, i);
+        } else {
+          const Eigen::Vector3d z(standard_normal(rng), standard_normal(rng), standard_normal(rng));
+          proposals.block(3 * j, i, 3, 1) = latents_.block(3 * j, i, 3, 1) + chol[static_cast<std::size_t>(j)] * z;
+        }
+        log_u[i * older + j] = std::log(uniform_open01(rng));
+      }
+    }
+  });
+  // Simulate every (particle, older truck) proposal; chunks of particles run in parallel.
+  Eigen::MatrixXd new_ssr(older, P);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    std::vector<SsrJob> jobs;
+    for (Eigen::Index i = begin; i < end; ++i) {
+      for (Eigen::Index j = 0; j < older; ++j) {
+        jobs.push_back({j, proposals.col(i).data() + 3 * j, &new_ssr(j, i), psi_.col(i).data()});
+      }
+    }
+    simulate_ssr(jobs);
+  });
+  passes_ += older * P;
+  // Accept per (particle, truck): only truck j's own terms change, given θ.
+  std::vector<char> took(static_cast<std::size_t>(older * P), 0);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const HyperVector t = theta_of(i);
+      for (Eigen::Index j = 0; j < older; ++j) {
+        if (!std::isfinite(new_ssr(j, i))) continue;
+        // With the stiffnesses proposed from p(k, k_t | θ), their density cancels against the
+        // proposal's and the MH ratio is the likelihood ratio.
+        const auto terms = [&](const double* x, double ssr) {
+          const double prior = stiffness_from_prior ? 0.0 : latent_log_density(x, t, psi_.col(i).data());
+          return prior + log_likelihood_from_ssr(ssr, sensors_, t[kSigmaIf]);
+        };
+        const double log_ratio = terms(proposals.col(i).data() + 3 * j, new_ssr(j, i)) -
+                                 terms(latents_.col(i).data() + 3 * j, ssr_(j, i));
+        if (log_u[i * older + j] < log_ratio) {
+          latents_.block(3 * j, i, 3, 1) = proposals.block(3 * j, i, 3, 1);
+          ssr_(j, i) = new_ssr(j, i);
+          took[static_cast<std::size_t>(i * older + j)] = 1;
+        }
+      }
+      recompute_sums(i);
+    }
+  });
+  if (stiffness_from_prior) {  // the random walk's scale adapts on its own acceptance only
+    older_acceptance_ = static_cast<double>(std::count(took.begin(), took.end(), 1)) / static_cast<double>(took.size());
+    return;
+  }
+  // Acceptance per truck (a serial reduction after the loop: the same whatever the threads).
+  double total = 0.0;
+  for (Eigen::Index j = 0; j < older; ++j) {
+    Eigen::Index moved = 0;
+    for (Eigen::Index i = 0; i < P; ++i) moved += took[static_cast<std::size_t>(i * older + j)];
+    const double rate = static_cast<double>(moved) / static_cast<double>(P);
+    auto& scale = scales[static_cast<std::size_t>(j)];
+    scale = smc::tuned_scale_factor(scale, rate);
+    total += rate;
+  }
+  older_acceptance_ = total / static_cast<double>(older);
+}
+
+void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel, PsiMove move) {
+  const Eigen::Index P = options_.particles, n = kept_trucks(), d = psi_.rows();
+  const ModelExtension& ext = *options_.extension;
+  // Proposal: the cloud's spread of ψ (equal weights), 2.38/√d, times a multiplier adapted on
+  // acceptance; a ridge of 1e-4 of each prior width keeps a collapsed coordinate movable.
+  const Eigen::VectorXd mean = psi_.rowwise().mean();
+  const Eigen::MatrixXd centred = psi_.colwise() - mean;
+  Eigen::MatrixXd cov = centred * centred.transpose() / static_cast<double>(P);
+  for (Eigen::Index j = 0; j < d; ++j) {
+    const auto& p = ext.parameters()[static_cast<std::size_t>(j)];
+    cov(j, j) += std::pow(1e-4 * (p.hi - p.lo), 2);
+  }
+  Eigen::MatrixXd chol = Eigen::LLT<Eigen::MatrixXd>(cov).matrixL();
+  chol *= extension_scale_ * 2.38 / std::sqrt(static_cast<double>(d));
+  Eigen::MatrixXd proposals(d, P);
+  Eigen::ArrayXd log_u(P);
+  std::vector<char> inside(static_cast<std::size_t>(P), 0);
+  for (Eigen::Index i = 0; i < P; ++i) {
+    smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+    if (move == PsiMove::kJump) {
+      std::vector<double> u(static_cast<std::size_t>(ext.jump_draws()));
+      for (double& v : u) v = smc::uniform01(rng);
+      ext.jump(psi_.col(i).data(), u.data(), proposals.col(i).data());
+    } else {
+      Eigen::VectorXd z(d);
+      for (Eigen::Index j = 0; j < d; ++j) z[j] = standard_normal(rng);
+      proposals.col(i) = psi_.col(i) + chol * z;
+    }
+    log_u[i] = std::log(uniform_open01(rng));
+    inside[static_cast<std::size_t>(i)] = ext.in_prior(proposals.col(i).data()) ? 1 : 0;
+  }
+  // Every kept truck of every particle whose proposal is inside the prior, at the proposal.
+  Eigen::MatrixXd new_ssr = Eigen::MatrixXd::Constant(n, P, kInf);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    std::vector<SsrJob> jobs;
+    for (Eigen::Index i = begin; i < end; ++i) {
+      if (!inside[static_cast<std::size_t>(i)]) continue;
+      for (Eigen::Index j = 0; j < n; ++j) {
+        jobs.push_back({j, latents_.col(i).data() + 3 * j, &new_ssr(j, i), proposals.col(i).data()});
+      }
+    }
+    simulate_ssr(jobs);
+  });
+  passes_ += n * static_cast<long long>(std::count(inside.begin(), inside.end(), 1));
+  Eigen::Index moved = 0;
+  for (Eigen::Index i = 0; i < P; ++i) {
+    if (!inside[static_cast<std::size_t>(i)]) continue;
+    // Uniform prior: inside the box, the ratio is the likelihood ratio over every kept truck
+    // (the newest included, at φ = 1).
+    const double s_new = new_ssr.col(i).sum(), s_old = ssr_.col(i).sum();
+    if (!std::isfinite(s_new)) continue;
+    const double sigma = theta_(kSigmaIf, i);
+    double log_ratio = (s_old - s_new) / (2.0 * sigma * sigma);
+    if (stiffness_edited()) {  // ψ also changes the fleet density of every kept truck's k
+      const double mean = theta_(kK, i), sd = theta_(kSigmaK, i);
+      log_ratio += stiffness_log_density(i, mean, sd, proposals.col(i).data(), n) -
+                   stiffness_log_density(i, mean, sd, psi_.col(i).data(), n);
+    }
+    if (log_u[i] < log_ratio) {
+      psi_.col(i) = proposals.col(i);
+      ssr_.col(i) = new_ssr.col(i);
+      recompute_sums(i);
+      ++moved;
+    }
+  }
+  if (move == PsiMove::kJump) {  // the random walk's scale adapts on its own acceptance only
+    extension_jump_acceptance_ = static_cast<double>(moved) / static_cast<double>(P);
+    return;
+  }
+  extension_acceptance_ = static_cast<double>(moved) / static_cast<double>(P);
+  extension_scale_ = smc::tuned_scale_factor(extension_scale_, extension_acceptance_);
+}
+
+void FleetTarget::stiffness_distribution_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel) {
+  const ModelExtension& ext = *options_.extension;
+  const Eigen::Index P = options_.particles, n = kept_trucks();
+  if (n == 0) return;
+  const bool with_psi = !ext.edits_forward();  // otherwise ψ moves in extension_sweep, with the likelihood
+  const Eigen::Index d = 2 + (with_psi ? psi_.rows() : 0);
+  Eigen::MatrixXd state(d, P);  // (K, σ_k[, ψ]) per particle
+  state.row(0) = theta_.row(kK);
+  state.row(1) = theta_.row(kSigmaK);
+  if (with_psi) state.bottomRows(psi_.rows()) = psi_;
+  const Eigen::MatrixXd chol =
+      Eigen::LLT<Eigen::MatrixXd>(smc::proposal_covariance(state, Eigen::ArrayXd::Ones(P), 2.38 * stiffness_scale_)).matrixL();
+  const auto& prior = options_.prior;
+  // log p(K, σ_k, ψ | every kept truck's k) up to a constant: the uniform boxes and the trucks'
+  // stiffness densities (the newest truck's in full: its latents are in γ at every φ).
+  const auto log_density = [&](Eigen::Index i, const Eigen::VectorXd& x) {
+    if (!(x[0] >= prior.lo[kK] && x[0] <= prior.hi[kK] && x[1] >= prior.lo[kSigmaK] && x[1] <= prior.hi[kSigmaK])) return -kInf;
+    const double* psi = with_psi ? x.data() + 2 : psi_.col(i).data();
+    if (with_psi && !ext.in_prior(psi)) return -kInf;
+    return stiffness_log_density(i, x[0], x[1], psi, n);
+  };
+  std::vector<int> moved(static_cast<std::size_t>(P), 0);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    Eigen::VectorXd z(d);
+    for (Eigen::Index i = begin; i < end; ++i) {
+      smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+      Eigen::VectorXd x = state.col(i);
+      double lp = log_density(i, x);
+      for (int step = 0; step < kStiffnessSteps; ++step) {
+        for (Eigen::Index j = 0; j < d; ++j) z[j] = standard_normal(rng);
+        const Eigen::VectorXd y = x + chol * z;
+        const double lp_new = log_density(i, y);
+        if (std::log(uniform_open01(rng)) < lp_new - lp) {
+          x = y;
+          lp = lp_new;
+          ++moved[static_cast<std::size_t>(i)];
+        }
+      }
+      theta_(kK, i) = x[0];
+      theta_(kSigmaK, i) = x[1];
+      if (with_psi) psi_.col(i) = x.tail(psi_.rows());
+    }
+  });
+  // A serial reduction: the same whatever the threads.
+  double total = 0.0;
+  for (int m : moved) total += m;
+  stiffness_acceptance_ = total / static_cast<double>(P * kStiffnessSteps);
+  stiffness_scale_ = smc::tuned_scale_factor(stiffness_scale_, stiffness_acceptance_);
+}
+
+}  // namespace ssrfleet::fleet
