@@ -13,6 +13,7 @@
 
 #include "fleet/batch_mcmc_interweave.hpp"
 #include "fleet/batch_mcmc_residuals.hpp"
+#include "model/fleet_conditionals.hpp"
 #include "model/truck_table.hpp"
 #include "smc/engine.hpp"
 #include "model/truncated_samplers.hpp"
@@ -77,15 +78,6 @@ int sigma_mh(Engine& engine, double& sigma, int n, double sum_squares, double lo
     }
   }
   return accepted;
-}
-
-// log p(z_1..N | Z, sigma_z) with z_n ~ N(Z, sigma_z^2) truncated to the road, given the
-// sufficient statistics sum z and sum z^2.
-double log_lateral_density(double sum_z, double sum_z2, int n, double mean, double sd,
-                           const LateralRange& range) {
-  const double ss = sum_z2 - 2.0 * mean * sum_z + n * mean * mean;
-  return -0.5 * n * kLog2Pi - n * std::log(sd) - 0.5 * ss / (sd * sd) -
-         n * log_normal_mass(range.lo_m, range.hi_m, mean, sd);
 }
 
 }  // namespace
@@ -444,11 +436,11 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
       auto mean_and_scale = [&](const Eigen::VectorXd& v, int mean_index, int sd_index, long long& acc,
                                 long long& tries) {
         const auto mi = static_cast<std::size_t>(mean_index), si = static_cast<std::size_t>(sd_index);
-        theta[mi] = draw_truncated_normal(engine, v.mean(), theta[si] / std::sqrt(static_cast<double>(N)),
-                                          prior.lo[mi], prior.hi[mi]);
-        const double ss = (v.array() - theta[mi]).square().sum();
+        const LatentSums sums{static_cast<double>(N), v.sum(), v.squaredNorm()};
+        theta[mi] = draw_mean_given_latents(engine, sums, theta[si], prior.lo[mi], prior.hi[mi]);
+        const double ss = sums.squares_about(theta[mi]);
         if (N >= 2) {
-          theta[si] = draw_scale_given_sum_squares(engine, N, ss, prior.lo[si], prior.hi[si]);
+          theta[si] = draw_sd_given_latents(engine, sums, theta[mi], prior.lo[si], prior.hi[si]);
           ++acc;
           ++tries;
         } else {
@@ -468,8 +460,8 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
       // (Z, sigma_z): joint random-walk MH; the truncation normaliser breaks conjugacy.
       const Eigen::VectorXd z =
           x.col(kLateral);  // a copy: the same sums, bit for bit, as before interweaving
-      const double sum_z = z.sum(), sum_z2 = z.squaredNorm();
-      double current = log_lateral_density(sum_z, sum_z2, N, theta[kZ], theta[kSigmaZ], range);
+      const LatentSums z_sums{static_cast<double>(N), z.sum(), z.squaredNorm()};
+      double current = log_lateral_sum(z_sums, theta[kZ], theta[kSigmaZ], range);
       const Eigen::Vector2d step = std::exp(z_log_scale) * z_base_sd;
       int z_acc = 0;
       for (int s = 0; s < options.z_moves_per_sweep; ++s) {
@@ -477,7 +469,7 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
         const double sz = theta[kSigmaZ] + step[1] * normal(engine);
         double alpha_prob = 0.0;
         if (Z >= prior.lo[kZ] && Z <= prior.hi[kZ] && sz >= prior.lo[kSigmaZ] && sz <= prior.hi[kSigmaZ]) {
-          const double candidate = log_lateral_density(sum_z, sum_z2, N, Z, sz, range);
+          const double candidate = log_lateral_sum(z_sums, Z, sz, range);
           const double log_alpha = candidate - current;
           alpha_prob = std::isfinite(log_alpha) ? std::min(1.0, std::exp(log_alpha)) : 0.0;
           if (log_uniform(engine) < log_alpha) {
@@ -511,8 +503,8 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
       // sigma_IF | residuals: N M observations, S = total of the cached per-truck SSR.
       const int n_obs = N * M;
       if (n_obs >= 2) {
-        theta[kSigmaIf] =
-            draw_scale_given_sum_squares(engine, n_obs, ssr.sum(), prior.lo[kSigmaIf], prior.hi[kSigmaIf]);
+        theta[kSigmaIf] = draw_noise_sd_given_ssr(engine, static_cast<double>(n_obs), ssr.sum(), prior.lo[kSigmaIf],
+                                                  prior.hi[kSigmaIf]);
         ++sif_acc;
         ++sif_try;
       } else {

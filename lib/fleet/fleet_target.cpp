@@ -9,6 +9,7 @@
 #include <string>
 
 #include "model/extended_forward.hpp"
+#include "model/fleet_conditionals.hpp"
 #include "model/truncated_samplers.hpp"
 #include "smc/mh_kernel.hpp"
 #include "smc/rng.hpp"
@@ -23,11 +24,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // The one engine MH block: the newest truck's latents.
 constexpr int kNewestBlock = 0;
 
-// Sum over n draws of log N(x; mean, sd) from Σx and Σx².
-double sum_log_normal(double n, double sum, double sum2, double mean, double sd) {
-  const double squares = sum2 - 2.0 * mean * sum + n * mean * mean;
-  return -0.5 * n * kLog2Pi - n * std::log(sd) - squares / (2.0 * sd * sd);
-}
 }  // namespace
 
 FleetTarget::FleetTarget(const site::Site& site, Options options)
@@ -196,12 +192,10 @@ double FleetTarget::base_density(Eigen::Index i, const HyperVector& t, const dou
     // With an extension's stiffness distribution there is no sufficient statistic: every older
     // truck's k is in (the exact regime keeps them all).
     lp += stiffness_edited() ? stiffness_log_density(i, t[kK], t[kSigmaK], psi, kept_trucks() - 1)
-                             : sum_log_normal(n, s[kSumK], s[kSumK2], t[kK], t[kSigmaK]);
-    lp += sum_log_normal(n, s[kSumKt], s[kSumKt2], t[kKt], t[kSigmaKt]);
-    lp += sum_log_normal(n, s[kSumZ], s[kSumZ2], t[kZ], t[kSigmaZ]) -
-          n * log_normal_mass(lateral_.lo_m, lateral_.hi_m, t[kZ], t[kSigmaZ]);
-    const double nm = n * sensors_;
-    lp += -0.5 * nm * kLog2Pi - nm * std::log(t[kSigmaIf]) - s[kSumSsr] / (2.0 * t[kSigmaIf] * t[kSigmaIf]);
+                             : log_normal_sum({n, s[kSumK], s[kSumK2]}, t[kK], t[kSigmaK]);
+    lp += log_normal_sum({n, s[kSumKt], s[kSumKt2]}, t[kKt], t[kSigmaKt]);
+    lp += log_lateral_sum({n, s[kSumZ], s[kSumZ2]}, t[kZ], t[kSigmaZ], lateral_);
+    lp += log_noise_sum(n * sensors_, s[kSumSsr], t[kSigmaIf]);
   }
   return lp + latent_log_density(newest, t, psi);
 }

@@ -12,6 +12,7 @@
 #include <Eigen/Cholesky>
 
 #include "model/extended_forward.hpp"
+#include "model/fleet_conditionals.hpp"
 #include "model/truncated_samplers.hpp"
 #include "smc/mh_kernel.hpp"
 #include "smc/rng.hpp"
@@ -99,33 +100,32 @@ void FleetTarget::theta_moves(double phi, const smc::RngFactory& rngs, const smc
       const double* s = sums_.col(i).data();
       const double* x = latents_.col(i).data() + 3 * newest;
       // Sums over all n+1 latents (older ones from the running sums, plus the newest).
-      const double sk = s[kSumK] + x[kStiffness], sk2 = s[kSumK2] + x[kStiffness] * x[kStiffness];
-      const double skt = s[kSumKt] + x[kTyreStiffness], skt2 = s[kSumKt2] + x[kTyreStiffness] * x[kTyreStiffness];
+      auto with_newest = [&](int sum, int sum2, int latent) {
+        return LatentSums{n_all, s[sum] + x[latent], s[sum2] + x[latent] * x[latent]};
+      };
+      const LatentSums k = with_newest(kSumK, kSumK2, kStiffness), kt = with_newest(kSumKt, kSumKt2, kTyreStiffness);
       // (K, σ_k) have standard conditionals only under the base model's N(K, σ_k²); an extension's
       // stiffness distribution moves them in stiffness_distribution_sweep instead.
-      if (!stiffness_edited()) t[kK] = draw_truncated_normal(rng, sk / n_all, t[kSigmaK] / std::sqrt(n_all), prior.lo[kK], prior.hi[kK]);
-      t[kKt] = draw_truncated_normal(rng, skt / n_all, t[kSigmaKt] / std::sqrt(n_all), prior.lo[kKt], prior.hi[kKt]);
+      if (!stiffness_edited()) t[kK] = draw_mean_given_latents(rng, k, t[kSigmaK], prior.lo[kK], prior.hi[kK]);
+      t[kKt] = draw_mean_given_latents(rng, kt, t[kSigmaKt], prior.lo[kKt], prior.hi[kKt]);
       if (trucks() >= 2) {
-        const double ssk = std::max(0.0, sk2 - 2.0 * t[kK] * sk + n_all * t[kK] * t[kK]);
-        const double sskt = std::max(0.0, skt2 - 2.0 * t[kKt] * skt + n_all * t[kKt] * t[kKt]);
-        if (!stiffness_edited()) t[kSigmaK] = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), ssk, prior.lo[kSigmaK], prior.hi[kSigmaK]);
-        t[kSigmaKt] = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), sskt, prior.lo[kSigmaKt], prior.hi[kSigmaKt]);
+        if (!stiffness_edited()) t[kSigmaK] = draw_sd_given_latents(rng, k, t[kK], prior.lo[kSigmaK], prior.hi[kSigmaK]);
+        t[kSigmaKt] = draw_sd_given_latents(rng, kt, t[kKt], prior.lo[kSigmaKt], prior.hi[kSigmaKt]);
       }
       // (Z, σ_z): the Gaussian part of their conditional is standard; the truncation to the road
       // adds m(Z, σ_z)^-N (m = the road's share of N(Z, σ_z²)). Propose from the Gaussian part
       // on the prior box and accept with the ratio of m^-N: exact MH, accepting almost always.
-      const double sz = s[kSumZ] + x[kLateral], sz2 = s[kSumZ2] + x[kLateral] * x[kLateral];
+      const LatentSums z = with_newest(kSumZ, kSumZ2, kLateral);
       const auto log_mass = [&](double mean, double sd) {
         return log_normal_mass(lateral_.lo_m, lateral_.hi_m, mean, sd);
       };
       {
-        const double z_new = draw_truncated_normal(rng, sz / n_all, t[kSigmaZ] / std::sqrt(n_all), prior.lo[kZ], prior.hi[kZ]);
+        const double z_new = draw_mean_given_latents(rng, z, t[kSigmaZ], prior.lo[kZ], prior.hi[kZ]);
         const double log_accept = n_all * (log_mass(t[kZ], t[kSigmaZ]) - log_mass(z_new, t[kSigmaZ]));
         if (std::log(uniform_open01(rng)) < log_accept) t[kZ] = z_new;
       }
       if (trucks() >= 2) {
-        const double ssz = std::max(0.0, sz2 - 2.0 * t[kZ] * sz + n_all * t[kZ] * t[kZ]);
-        const double sd_new = draw_scale_given_sum_squares(rng, static_cast<int>(n_all), ssz, prior.lo[kSigmaZ], prior.hi[kSigmaZ]);
+        const double sd_new = draw_sd_given_latents(rng, z, t[kZ], prior.lo[kSigmaZ], prior.hi[kSigmaZ]);
         const double log_accept = n_all * (log_mass(t[kZ], t[kSigmaZ]) - log_mass(t[kZ], sd_new));
         if (std::log(uniform_open01(rng)) < log_accept) t[kSigmaZ] = sd_new;
       }
@@ -133,13 +133,9 @@ void FleetTarget::theta_moves(double phi, const smc::RngFactory& rngs, const smc
       // precision is Gamma((M(n+φ) - 1)/2, (ΣSSR + φ SSR_new)/2) on the box.
       const double ssr_new = ssr_(newest, i);
       if (std::isfinite(ssr_new) && std::isfinite(s[kSumSsr])) {
-        const double a = sensors_ * (n_all - 1.0 + phi);
-        const double shape = 0.5 * (a - 1.0), rate = 0.5 * (s[kSumSsr] + phi * ssr_new);
-        if (shape > 0.0 && rate > 0.0) {
-          const double lo_sd = prior.lo[kSigmaIf], hi_sd = prior.hi[kSigmaIf];
-          const double tau = draw_truncated_gamma(rng, shape, rate, 1.0 / (hi_sd * hi_sd), 1.0 / (lo_sd * lo_sd));
-          t[kSigmaIf] = std::clamp(1.0 / std::sqrt(tau), lo_sd, hi_sd);
-        }
+        const double observations = sensors_ * (n_all - 1.0 + phi), ssr = s[kSumSsr] + phi * ssr_new;
+        if (observations > 1.0 && ssr > 0.0)
+          t[kSigmaIf] = draw_noise_sd_given_ssr(rng, observations, ssr, prior.lo[kSigmaIf], prior.hi[kSigmaIf]);
       }
       for (int j = 0; j < kHyperCount; ++j) theta_(j, i) = t[j];
       log_base[i] = base_density(i, t, x);
