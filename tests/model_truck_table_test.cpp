@@ -125,3 +125,27 @@ TEST_CASE("a truck's table finds its best fit and keeps its nodes within the thr
   const Eigen::VectorXd short_record = log.records[0].impact_factor.head(10);
   CHECK_THROWS_WITH(model::fit_truck(site, 23.0, 4450.0, short_record, to), Catch::Contains("10 impact factors"));
 }
+
+TEST_CASE("a table whose guessed region holds no admissible node grows from the truck's best fit", "[model]") {
+  // The region the flood fill starts from is a Gaussian guess (the likelihood's Hessian combined with
+  // the fleet's predictive). On road AS2 a ridge-shaped likelihood once put its centre at a negative
+  // k_t, where no node is admissible, and the integrator was asked for a negative tyre stiffness.
+  // Force that here: a predictive so narrow and so far below the fit that the guessed region lies at
+  // k_t <= 0.
+  const site::Site site(site::load_road("AS2"), site::SiteOptions{});
+  const auto trucks = fleet::draw_fleet(fleet::FleetDistribution{}, 1, site.lateral_min_m(), site.lateral_max_m(), 5);
+  const auto log = fleet::simulate_log(site, trucks, 0.03, 5);
+  const auto& r = log.records[0];
+  model::TruckTableOptions to;
+  to.sigma_ref = 0.03;
+  to.population = model::TruckTableOptions::Population{500e3, 50e3, -2e6, 1e3};
+  const model::TruckFit f = model::fit_truck(site, r.speed_mps, r.sprung_mass_kg, r.impact_factor, to);
+  const model::Lattice lattice{f.stiffness_npm, 20e3, f.tyre_stiffness_npm, 90e3};
+  model::TruckTable table;
+  REQUIRE_NOTHROW(table = model::build_truck_table(site, r.speed_mps, r.sprung_mass_kg, r.impact_factor, lattice, to, f));
+  REQUIRE(table.nodes() > 0);
+  for (std::size_t g = 0; g < table.nodes(); ++g) {
+    CHECK(lattice.k_at(table.k_index[g]) > 0.0);
+    CHECK(lattice.kt_at(table.kt_index[g]) > 0.0);
+  }
+}

@@ -227,7 +227,17 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
         if (d.dot(precision * d) <= radius2) pending.emplace_back(i, j);
       }
     }
-    if (pending.empty()) pending.emplace_back(static_cast<int>(std::lround(ci)), static_cast<int>(std::lround(cj)));
+    // Seed the node nearest the mode's own best fit too. The region above is only a Gaussian guess:
+    // a ridge-shaped likelihood (k and k_t nearly interchangeable) combined with the population can
+    // put its centre far off the fit, even at a negative stiffness (seen on road AS2), where no
+    // node is admissible. The flood fill below grows from whatever scores above the threshold.
+    {
+      int fi = static_cast<int>(std::lround((mode.k_npm - lattice.k_origin_npm) / lattice.dk_npm));
+      int fj = static_cast<int>(std::lround((mode.kt_npm - lattice.kt_origin_npm) / lattice.dkt_npm));
+      while (!(lattice.k_at(fi) > 0.0)) ++fi;
+      while (!(lattice.kt_at(fj) > 0.0)) ++fj;
+      if (std::find(pending.begin(), pending.end(), std::pair{fi, fj}) == pending.end()) pending.emplace_back(fi, fj);
+    }
     for (int round = 0; !pending.empty() && round < 50; ++round) {
       std::vector<double> k, kt, z;
       for (const auto& [i, j] : pending) {
