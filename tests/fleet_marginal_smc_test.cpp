@@ -214,3 +214,35 @@ TEST_CASE("the replay driver runs the schedule's final sweeps after the last tru
   no_final.final_sweeps = -2;
   CHECK_THROWS_AS(fleet::replay(*none, c.log.records, no_final), UsageError);
 }
+
+TEST_CASE("the tables check their lateral approximation: within budget on AS1 and flagged on AS2", "[marginal]") {
+  auto mean_error = [](const char* road, const fleet::FleetDistribution& d, double noise, std::string* warning) {
+    const site::Site site(site::load_road(road), site::SiteOptions{});
+    const auto trucks = fleet::draw_fleet(d, 30, site.lateral_min_m(), site.lateral_max_m(), 1);
+    const auto log = fleet::simulate_log(site, trucks, noise, 1);
+    fleet::OnlineFitOptions o;
+    o.marginal = options(256, 2, 3);
+    const auto fit = fleet::make_online_fit(site, o);
+    for (const auto& r : log.records) fit->absorb(r);
+    *warning = fit->warning();
+    const fleet::MarginalSmc& smc = *fit->marginal();
+    CHECK(smc.target().lateral_checked() == 29);  // every truck after the first
+    return smc.target().lateral_error_mean();
+  };
+  std::string warning;
+  // Table 1 on AS1: the sensors pin each truck's z down and the moment matching holds (~1e-4).
+  const double as1 = mean_error("AS1", fleet::FleetDistribution{}, 0.02, &warning);
+  CHECK(as1 < 0.1 * fleet::MarginalSmc::kLateralErrorWarning);
+  CHECK(warning.empty());
+  // The second fleet on AS2: z is broad and many-peaked across the lane (0.1-0.2 nats per truck
+  // measured against the brute-force integral), and the fit says so.
+  fleet::FleetDistribution second;
+  second.stiffness_npm = {380e3, 60e3};
+  second.tyre_stiffness_npm = {1.6e6, 240e3};
+  second.lateral_m = {1.8, 0.35};
+  second.sprung_mass_kg = {5200, 600};
+  second.speed_mps = {20, 3};
+  const double as2 = mean_error("AS2", second, 0.03, &warning);
+  CHECK(as2 > fleet::MarginalSmc::kLateralErrorWarning);
+  CHECK_THAT(warning, Catch::Contains("lateral") && Catch::Contains("--core latent"));
+}

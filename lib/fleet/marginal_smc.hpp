@@ -37,6 +37,11 @@ class MarginalSmc {
     MarginalTarget::Options target;  // its particles follow sampler.particles
   };
 
+  // Above this mean |error| of the tables' lateral approximation (nats per truck,
+  // MarginalTarget::lateral_error_mean) a fit warns: on road AS1 it is about 1e-4; on AS2 with a
+  // second fleet it was 0.1-0.2 and σ_z came out 0.59 against a truth of 0.35.
+  static constexpr double kLateralErrorWarning = 0.01;
+
   MarginalSmc(const site::Site& site, Options options);
 
   // Tempers the record's likelihood in (and rebuilds the tables if the posterior asks for it).

@@ -157,6 +157,12 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
   }
   model::TruckTableOptions o = table_options(now);
   if (trucks() == 0) o.population.reset();
+  if (trucks() > 0) {
+    // The table measures its lateral approximation at the fleet's current (Z, σ_z) (a diagnostic:
+    // the tables do not depend on it).
+    o.lateral_check = model::TruckTableOptions::LateralReference{(W * theta_.row(kZ).transpose().array()).sum(),
+                                                                 (W * theta_.row(kSigmaZ).transpose().array()).sum()};
+  }
   const model::TruckFit fit = model::fit_truck(site_, speed_mps, sprung_mass_kg, impact_factors, o);
   if (trucks() == 0) {
     // The first truck sets the lattice's origin and first spacing, and σ_ref (its own noise
@@ -175,6 +181,10 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
   const model::TruckTable table =
       model::build_truck_table(site_, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
   passes_ += table.passes;
+  if (std::isfinite(table.lateral_error_nats)) {
+    ++lateral_checked_;
+    lateral_error_abs_sum_ += std::abs(table.lateral_error_nats);
+  }
   store_.append(table);
   speed_mps_.push_back(speed_mps);
   sprung_mass_kg_.push_back(sprung_mass_kg);

@@ -22,6 +22,7 @@
 #pragma once
 
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -90,6 +91,14 @@ class MarginalTarget final : public smc::TemperedModel {
   const Eigen::MatrixXd& theta() const { return theta_; }  // 7 x P
   const TableSettings& settings() const { return settings_; }
   const model::TableStore& tables() const { return store_; }
+  // The tables' own check of their z approximation (TruckTable::lateral_error_nats) over the trucks
+  // absorbed by this process since the second (not kept in checkpoints: a diagnostic): the mean of
+  // its absolute value, in nats per truck (NaN before any check).
+  double lateral_error_mean() const {
+    return lateral_checked_ > 0 ? lateral_error_abs_sum_ / static_cast<double>(lateral_checked_)
+                                : std::numeric_limits<double>::quiet_NaN();
+  }
+  long lateral_checked() const { return lateral_checked_; }
   const model::FleetMarginal& marginal() const { return marginal_; }
   const std::vector<double>& speed_mps() const { return speed_mps_; }
   const std::vector<double>& sprung_mass_kg() const { return sprung_mass_kg_; }
@@ -139,6 +148,8 @@ class MarginalTarget final : public smc::TemperedModel {
   const site::Site& site_;
   Options options_;
   fleet::LateralRange lateral_;
+  long lateral_checked_ = 0;
+  double lateral_error_abs_sum_ = 0.0;
   TableSettings settings_;
   model::FleetMarginal marginal_;
   model::TableStore store_;

@@ -1,5 +1,8 @@
 #include "fleet/online_fit.hpp"
 
+#include <iomanip>
+#include <sstream>
+
 #include "util/errors.hpp"
 
 namespace ssrfleet::fleet {
@@ -31,6 +34,17 @@ class MarginalFit final : public CoreFit<MarginalSmc> {
   std::string core() const override { return "marginal"; }
   std::string note() const override {
     return smc_.last_rebuild().empty() ? "" : "tables rebuilt (" + smc_.last_rebuild() + ")";
+  }
+  const MarginalSmc* marginal() const override { return &smc_; }
+  std::string warning() const override {
+    const double e = smc_.target().lateral_error_mean();
+    if (!(e > MarginalSmc::kLateralErrorWarning)) return "";
+    std::ostringstream os;
+    os << "the marginal core's lateral (z) approximation is off by " << std::setprecision(2) << e
+       << " nats per truck on average here (budget " << MarginalSmc::kLateralErrorWarning
+       << "): the sensors leave the trucks' lateral positions broad and many-peaked across the lane, "
+          "so Z and sigma_z (and what depends on them) may be biased; compare with --core latent";
+    return os.str();
   }
   bool splits_state() const override { return true; }
   void save_state(BinaryWriter& out) const override { smc_.save_state(out); }

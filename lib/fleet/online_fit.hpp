@@ -39,8 +39,13 @@ class OnlineFit {
   // The latent core itself, for what only it has (every truck's latents, an extension's ψ);
   // nullptr for the marginal core.
   virtual const FleetSmc* latent() const { return nullptr; }
+  // The marginal core itself (its tables' diagnostics); nullptr for the latent core.
+  virtual const MarginalSmc* marginal() const { return nullptr; }
   // A line for progress output after absorb(): what the last record cost beyond its stage.
   virtual std::string note() const { return ""; }
+  // What the user should know about the posterior's quality ("" if nothing), e.g. an
+  // approximation that the data push past its budget.
+  virtual std::string warning() const { return ""; }
 
   // A state in two parts for a stream, so its checkpoint per truck costs O(1): a fixed-size part
   // and a log of truck records to append to (whole again after table_generation() moves on).

@@ -12,6 +12,7 @@
 
 #include <Eigen/Dense>
 
+#include "model/fleet_model.hpp"
 #include "util/errors.hpp"
 #include "util/gauss_legendre.hpp"
 
@@ -31,13 +32,22 @@ struct NodeResult {
   double log_i_ref = -kInf;
   double c = 0.0, m = 0.0, b = 0.0;
   double z_mean = 0.0, z_var = 0.0;
+  // With a lateral reference: log of ∫ L(z) N(z | Z, σ_z²) dz / ∫ L(z) dz, exactly (the points).
+  double lateral_exact = 0.0;
 };
+
+// log N(ẑ | Z, σ_z² + s²) as FleetMarginal evaluates it at u = u_ref (expanded in ε = s² / σ_z²).
+double lateral_gaussian_form(double z_mean, double z_var, double mean, double sd) {
+  const double var = sd * sd, eps = z_var / var, dz = z_mean - mean;
+  return -0.5 * (fleet::kLog2Pi + std::log(var)) - 0.5 * eps - dz * dz / (2.0 * var) * (1.0 - eps + eps * eps);
+}
 
 // The z-integral of exp(-u SSR(z) / 2) over the lines [first, last] of one node's passes, by
 // Gauss–Legendre on each segment. SSR is exactly quadratic on a segment: |e_a - w d|².
 NodeResult integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& ifs_by_line, Eigen::Index first_line,
                           const road::Surface& surface, const Eigen::Ref<const Eigen::VectorXd>& y, double u_ref,
-                          const util::QuadratureRule& rule) {
+                          const util::QuadratureRule& rule,
+                          const std::optional<TruckTableOptions::LateralReference>& lateral) {
   const Eigen::Index lines = ifs_by_line.cols();
   const double dy = surface.dy_m;
   const std::size_t q = rule.nodes.size();
@@ -80,6 +90,14 @@ NodeResult integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& ifs_by_line, 
   r.c = r.log_i_ref + 0.5 * r.m * u_ref + r.b * std::log(u_ref);
   r.z_mean = z1 / sum;
   r.z_var = std::max(0.0, z2 / sum - r.z_mean * r.z_mean);
+  if (lateral) {
+    double with_prior = 0.0;
+    for (std::size_t i = 0; i < zs.size(); ++i) {
+      const double p = ws[i] * std::exp(-0.5 * u_ref * (ss[i] - smin));
+      with_prior += p * std::exp(fleet::log_normal_density(zs[i], lateral->mean_m, lateral->sd_m));
+    }
+    r.lateral_exact = std::log(with_prior / sum);
+  }
   return r;
 }
 
@@ -251,7 +269,7 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
       table.passes += static_cast<int>(k.size());
       for (std::size_t p = 0; p < pending.size(); ++p) {
         const NodeResult r = integrate_node(ifs.middleCols(static_cast<Eigen::Index>(p) * lines, lines), first_line,
-                                            surface, impact_factors, u_ref, rule);
+                                            surface, impact_factors, u_ref, rule, options.lateral_check);
         evaluated[pending[p]] = r;
         best_score = std::max(best_score, score(pending[p], r));
         best_log_i = std::max(best_log_i, r.log_i_ref);
@@ -292,6 +310,27 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
   }
   }
   table.z_var_ref_m2 = var_sum / wsum;
+  if (options.lateral_check) {
+    // log Σ_g w_g exp(d_g), w_g the kept node's share at u_ref with the exact lateral term and the
+    // fleet's predictive of (k, k_t), d_g = the Gaussian form minus the exact z-integral.
+    const auto& ref = *options.lateral_check;
+    std::vector<double> log_w, d;
+    for (const auto& evaluated : evaluated_by_mode) {
+      for (const auto& [ij, r] : evaluated) {
+        if (score(ij, r) < best_score - options.keep_nats) continue;
+        log_w.push_back(score(ij, r) + r.lateral_exact);
+        d.push_back(lateral_gaussian_form(r.z_mean, r.z_var, ref.mean_m, ref.sd_m) - r.lateral_exact);
+      }
+    }
+    const double top = *std::max_element(log_w.begin(), log_w.end());
+    double num = 0.0, den = 0.0;
+    for (std::size_t g = 0; g < d.size(); ++g) {
+      const double w = std::exp(log_w[g] - top);
+      num += w * std::exp(d[g]);
+      den += w;
+    }
+    table.lateral_error_nats = std::log(num / den);
+  }
   table.u_ref = u_ref;
   table.sensors = static_cast<int>(impact_factors.size());
   table.nodes_evaluated = evaluated_nodes;

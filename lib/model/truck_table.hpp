@@ -25,6 +25,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -74,6 +75,12 @@ struct TruckTableOptions {
   // keep_nats of the best (a lateral mode) is tabulated on its own lines, widened by this many
   // lines each side (a node's z-optimum moves a few mm to cm with (k, k_t)).
   int z_margin_lines = 2;
+  // If set, the table measures its own lateral approximation here (TruckTable::lateral_error_nats):
+  // the fleet's current (Z, σ_z), e.g. the posterior means.
+  struct LateralReference {
+    double mean_m = 0.0, sd_m = 0.0;
+  };
+  std::optional<LateralReference> lateral_check;
 };
 
 // The best fit of (k, k_t, z) to one truck's impact factors, and the curvature of its
@@ -106,6 +113,13 @@ struct TruckTable {
   int passes = 0;                   // integrator passes in all (search included)
   bool region_clipped = false;      // a node above the threshold sat on the searched region's edge
   int modes = 1;                    // lateral modes tabulated (runs of lines within the threshold)
+  // With options.lateral_check: log of the truck's likelihood by the table's Gaussian z form minus
+  // the same with the z-integral done exactly (the node's Gauss–Legendre points against the road's
+  // N(z | Z, σ_z²)), at u_ref and that (Z, σ_z), over the kept nodes weighted by their share of
+  // the likelihood times the fleet's predictive of (k, k_t). NaN without the check. Where the
+  // sensors pin a truck's z down (road AS1: about 1e-4 nats) the moment matching is exact to the
+  // budget; where they leave z broad and many-peaked across the lane (AS2) it is not.
+  double lateral_error_nats = std::numeric_limits<double>::quiet_NaN();
 
   std::size_t nodes() const { return c.size(); }
   std::size_t bytes() const;        // memory held
