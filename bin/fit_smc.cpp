@@ -1,5 +1,6 @@
 #include <chrono>
 #include <iomanip>
+#include <iostream>
 #include <sstream>
 #include <thread>
 
@@ -103,6 +104,8 @@ fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records:
     *progress << " done, " << std::fixed << std::setprecision(3) << done.final_s << " s\n";
     progress->unsetf(std::ios::floatfield);
   }
+  // Printed even with --quiet: it is about the answer, not the progress.
+  if (const std::string w = smc->warning(); !w.empty()) std::cerr << "ssrfleet fit: warning: " << w << "\n";
   return smc->cloud();
 }
 

@@ -443,12 +443,12 @@ TEST_CASE("batch MCMC on 30 simulated trucks brackets the true K and Kt and Z an
   CHECK(r.latent_acceptance > 0.15);
   CHECK(r.latent_acceptance < 0.5);
   // One batched pass per sweep plus the grid search (51 lateral positions per truck), plus one per
-  // ancillary step of each interwoven block once theta is free.
+  // lateral-jump sweep and one per ancillary step of each interwoven block once theta is free.
   const long long interwoven_blocks =
       o.interweave
           ? int{o.interweave_stiffness} + int{o.interweave_tyre_stiffness} + int{o.interweave_lateral}
           : 0;
-  CHECK(r.integrator_passes <= 30LL * 51 + 30LL * 6000 +
+  CHECK(r.integrator_passes <= 30LL * 51 + 30LL * 6000 + 30LL * ((6000 + o.lateral_jump_every - 1) / o.lateral_jump_every) +
                                    interwoven_blocks * o.ancillary_steps * 30LL *
                                        ((6000 - o.hold_theta_sweeps) / o.ancillary_every + 1));
   CHECK(r.integrator_calls >= 6000);
@@ -497,4 +497,46 @@ TEST_CASE("batch MCMC on the paper's 100-truck case brackets the true hyperparam
   const auto s = fleet::summarize_draws(r.theta_draws);
   CHECK(s[fleet::kSigmaZ].q025 <= 0.5);
   CHECK(0.5 <= s[fleet::kSigmaZ].q975);
+}
+
+TEST_CASE("lateral jumps let the batch MCMC cross between lateral modes on AS2", "[mcmc]") {
+  // A fleet on road AS2 whose trucks' z-likelihoods are broad and many-peaked across the lane: the
+  // random walk on (k, k_t, z) stays in the peak each truck starts in (its best fit), and sigma_z
+  // stays where those starts put it.
+  const site::Site site(site::load_road("AS2"), site::SiteOptions{});
+  fleet::FleetDistribution d;
+  d.stiffness_npm = {380e3, 60e3};
+  d.tyre_stiffness_npm = {1.6e6, 240e3};
+  d.lateral_m = {1.8, 0.35};
+  d.sprung_mass_kg = {5200, 600};
+  d.speed_mps = {20, 3};
+  const auto trucks = fleet::draw_fleet(d, 200, site.lateral_min_m(), site.lateral_max_m(), 1);
+  const auto log = fleet::simulate_log(site, trucks, 0.03, 1);
+  auto sigma_z = [&](int jump_every) {
+    fleet::BatchMcmcOptions o;
+    o.iterations = 4000;
+    o.burn_in = 1000;
+    o.seed = 7;
+    o.threads = 2;
+    o.lateral_jump_every = jump_every;
+    const auto r = fleet::run_batch_mcmc(site, log.records, o);
+    const Eigen::VectorXd c = r.theta_draws.col(fleet::kSigmaZ);
+    const double mean = c.mean(), sd = std::sqrt((c.array() - mean).square().mean());
+    struct Out {
+      double mean, sd, ess, jump_acceptance;
+    };
+    return Out{mean, sd, chain_effective_sample_size(c), r.lateral_jump_acceptance};
+  };
+  const auto with = sigma_z(fleet::BatchMcmcOptions{}.lateral_jump_every);
+  const auto without = sigma_z(0);
+  INFO("with jumps: sigma_z " << with.mean << " +- " << with.sd << ", ESS " << with.ess << ", jump acceptance "
+                              << with.jump_acceptance << "; without: " << without.mean << " +- " << without.sd
+                              << ", ESS " << without.ess);
+  CHECK(fleet::BatchMcmcOptions{}.lateral_jump_every > 0);  // on by default
+  CHECK(with.jump_acceptance > 0.1);
+  // With jumps the truth (0.35) is within 3 posterior sd, allowing 4 Monte Carlo sd of the mean.
+  CHECK(std::abs(with.mean - 0.35) < 3.0 * with.sd + 4.0 * with.sd / std::sqrt(with.ess));
+  CHECK(with.ess > 100.0);
+  // Without them the chain is stuck far off: the trap is real, so the check above means something.
+  CHECK(std::abs(without.mean - 0.35) > 3.0 * without.sd);
 }

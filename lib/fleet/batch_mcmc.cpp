@@ -135,6 +135,7 @@ bool BatchMcmcOptions::IsValid(std::string* error) const {
                         "false unless initial_latents is given");
   SSRFLEET_OPTION_CHECK(ancillary_steps >= 1, "ancillary_steps", ancillary_steps, ">= 1");
   SSRFLEET_OPTION_CHECK(ancillary_every >= 1, "ancillary_every", ancillary_every, ">= 1");
+  SSRFLEET_OPTION_CHECK(lateral_jump_every >= 0, "lateral_jump_every", lateral_jump_every, ">= 0");
   SSRFLEET_OPTION_CHECK(threads >= 0, "threads", threads, ">= 0 (0 = all hardware threads)");
   return true;
 }
@@ -315,6 +316,8 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
   std::vector<int> valid;
   valid.reserve(static_cast<std::size_t>(N));
   Eigen::ArrayXd k_prop, kt_prop, z_prop, ssr_prop;
+  Eigen::ArrayXd k_jump(N), kt_jump(N), z_jump(N), ssr_jump(N);
+  long long lateral_jumps_accepted = 0, lateral_jumps_tried = 0;
 
   // Interweaving: one ancillary updater per interwoven block, and the SSR of every truck with
   // one latent coordinate replaced (the other two at their current values).
@@ -397,6 +400,29 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
         }
       }
       sweep_acc = accept_prob.mean();
+
+      // Lateral jumps: z' from the prior on the road, (k, k_t) kept; the prior cancels against the
+      // proposal, so the likelihood ratio decides.
+      if (options.lateral_jump_every > 0 && it % options.lateral_jump_every == 0) {
+        std::vector<int> all_trucks(static_cast<std::size_t>(N));
+        for (int n = 0; n < N; ++n) all_trucks[static_cast<std::size_t>(n)] = n;
+        for (int n = 0; n < N; ++n) {
+          k_jump[n] = x(n, kStiffness);
+          kt_jump[n] = x(n, kTyreStiffness);
+          z_jump[n] = draw_truncated_normal(engine, theta[kZ], theta[kSigmaZ], range.lo_m, range.hi_m);
+        }
+        evaluator.evaluate(all_trucks, k_jump, kt_jump, z_jump, ssr_jump);
+        const double inv2var = 0.5 / (theta[kSigmaIf] * theta[kSigmaIf]);
+        for (int n = 0; n < N; ++n) {
+          const double log_alpha = -(ssr_jump[n] - ssr[n]) * inv2var;
+          if (log_uniform(engine) < log_alpha) {
+            x(n, kLateral) = z_jump[n];
+            ssr[n] = ssr_jump[n];
+            if (!burning_in) ++lateral_jumps_accepted;
+          }
+        }
+        if (!burning_in) lateral_jumps_tried += N;
+      }
 
       // Adaptation (burn-in only): Robbins-Monro on each truck's log scale towards the target
       // acceptance, and the truck's own chain covariance as the proposal shape.
@@ -560,6 +586,8 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
   result.ancillary_k_acceptance = rate(ancillary_k);
   result.ancillary_kt_acceptance = rate(ancillary_kt);
   result.ancillary_z_acceptance = rate(ancillary_z);
+  result.lateral_jump_acceptance =
+      lateral_jumps_tried > 0 ? static_cast<double>(lateral_jumps_accepted) / static_cast<double>(lateral_jumps_tried) : 0.0;
   result.latent_mean.resize(N, kLatentCount);
   result.latent_sd.resize(N, kLatentCount);
   for (int n = 0; n < N; ++n) {
