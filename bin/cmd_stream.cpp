@@ -83,6 +83,7 @@ int run_stream(int argc, const char* const argv[]) {
             << options.state_dir << "/rejects.csv), " << counts.skipped << " skipped as already absorbed; "
             << counts.total_absorbed << " trucks in the posterior" << (g_stop.load() ? " (stopped by signal)" : "")
             << "\n";
+  if (const std::string w = stream.warning(); !w.empty()) std::cerr << "ssrfleet stream: warning: " << w << "\n";
   return 0;
 }
 

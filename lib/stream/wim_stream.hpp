@@ -58,6 +58,8 @@ class WimStream {
   WimStream(const site::Site& site, StreamOptions options, std::ostream* progress, std::ostream& reports);
 
   bool resumed() const { return resumed_; }
+  // What the user should know about the posterior's quality (fleet::OnlineFit::warning), "" if nothing.
+  std::string warning() const { return smc_->warning(); }
 
   // Reads records from `in` until its end (or, following, until `stop` is set). `source` names
   // the input in messages and in the checkpoint (a resume skips by line only on the same source).
