@@ -11,7 +11,7 @@
 // The marginal core's curve is scale_benchmark's (--curve). Writes CSVs for
 // benchmarks/results/cost-curves.gp, which draws docs/scale_curve.png from all three.
 //
-//   cost_curves_benchmark [--latent-trucks 512] [--budget 900] [--ratio FILE]
+//   cost_curves_benchmark [--latent-trucks 512 (0: skip)] [--budget 900] [--ratio FILE]
 //                         [--latent-curve FILE] [--mcmc-curve FILE]
 #include <algorithm>
 #include <chrono>
@@ -94,8 +94,8 @@ int main(int argc, char** argv) {
       return a == "--help" ? 0 : 64;
     }
   }
-  if (latent_trucks < 2 || !(budget_s > 0.0)) {
-    std::cerr << "cost_curves_benchmark: --latent-trucks must be >= 2 and --budget positive\n";
+  if ((latent_trucks != 0 && latent_trucks < 2) || !(budget_s > 0.0)) {
+    std::cerr << "cost_curves_benchmark: --latent-trucks must be 0 (skip) or >= 2, and --budget positive\n";
     return 64;
   }
 
@@ -118,6 +118,7 @@ int main(int argc, char** argv) {
     std::cerr << "wrote " << mcmc_curve << "\n";
   }
 
+  if (latent_trucks == 0) return 0;
   const double load_before = bench::load_average_1min();
   const std::vector<double> ms = latent_core_times(latent_trucks, budget_s);
   std::ofstream out(latent_curve);
