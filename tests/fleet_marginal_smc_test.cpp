@@ -5,6 +5,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "test_support.hpp"
+
 #include "fleet/batch_mcmc.hpp"
 #include "model/fleet_distribution.hpp"
 #include "fleet/marginal_smc.hpp"
@@ -236,13 +238,7 @@ TEST_CASE("the tables check their lateral approximation: within budget on AS1 an
   CHECK(warning.empty());
   // The second fleet on AS2: z is broad and many-peaked across the lane (0.1-0.2 nats per truck
   // measured against the brute-force integral), and the fit says so.
-  fleet::FleetDistribution second;
-  second.stiffness_npm = {380e3, 60e3};
-  second.tyre_stiffness_npm = {1.6e6, 240e3};
-  second.lateral_m = {1.8, 0.35};
-  second.sprung_mass_kg = {5200, 600};
-  second.speed_mps = {20, 3};
-  const double as2 = mean_error("AS2", second, 0.03, &warning);
+  const double as2 = mean_error("AS2", test::second_fleet(), 0.03, &warning);
   CHECK(as2 > fleet::MarginalSmc::kLateralErrorWarning);
   CHECK_THAT(warning, Catch::Contains("lateral") && Catch::Contains("--core latent"));
 }

@@ -10,6 +10,8 @@
 #include <boost/random/mersenne_twister.hpp>
 #include <catch2/catch.hpp>
 
+#include "test_support.hpp"
+
 #include "fleet/batch_mcmc.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/simulator.hpp"
@@ -504,13 +506,7 @@ TEST_CASE("lateral jumps let the batch MCMC cross between lateral modes on AS2",
   // random walk on (k, k_t, z) stays in the peak each truck starts in (its best fit), and sigma_z
   // stays where those starts put it.
   const site::Site site(site::load_road("AS2"), site::SiteOptions{});
-  fleet::FleetDistribution d;
-  d.stiffness_npm = {380e3, 60e3};
-  d.tyre_stiffness_npm = {1.6e6, 240e3};
-  d.lateral_m = {1.8, 0.35};
-  d.sprung_mass_kg = {5200, 600};
-  d.speed_mps = {20, 3};
-  const auto trucks = fleet::draw_fleet(d, 200, site.lateral_min_m(), site.lateral_max_m(), 1);
+  const auto trucks = fleet::draw_fleet(test::second_fleet(), 200, site.lateral_min_m(), site.lateral_max_m(), 1);
   const auto log = fleet::simulate_log(site, trucks, 0.03, 1);
   auto sigma_z = [&](int jump_every) {
     fleet::BatchMcmcOptions o;

@@ -2,6 +2,8 @@
 // binary and capturing its exit status and output.
 #pragma once
 
+#include "model/fleet_distribution.hpp"
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +13,18 @@
 #include <sys/wait.h>
 
 namespace ssrfleet::test {
+
+// The second preset fleet of the benchmarks (benchmarks/fleet_presets.hpp: road AS2, sigma_IF 0.03),
+// whose trucks' lateral positions the sensors leave broad and many-peaked.
+inline fleet::FleetDistribution second_fleet() {
+  fleet::FleetDistribution d;
+  d.stiffness_npm = {380e3, 60e3};
+  d.tyre_stiffness_npm = {1.6e6, 240e3};
+  d.lateral_m = {1.8, 0.35};
+  d.sprung_mass_kg = {5200, 600};
+  d.speed_mps = {20, 3};
+  return d;
+}
 
 // A fresh directory under the system temp dir, removed when the object goes away.
 class TempDir {

@@ -318,6 +318,8 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
   Eigen::ArrayXd k_prop, kt_prop, z_prop, ssr_prop;
   Eigen::ArrayXd k_jump(N), kt_jump(N), z_jump(N), ssr_jump(N);
   long long lateral_jumps_accepted = 0, lateral_jumps_tried = 0;
+  std::vector<int> all_trucks(static_cast<std::size_t>(N));  // a lateral jump proposes for every truck
+  for (int n = 0; n < N; ++n) all_trucks[static_cast<std::size_t>(n)] = n;
 
   // Interweaving: one ancillary updater per interwoven block, and the SSR of every truck with
   // one latent coordinate replaced (the other two at their current values).
@@ -404,8 +406,6 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
       // Lateral jumps: z' from the prior on the road, (k, k_t) kept; the prior cancels against the
       // proposal, so the likelihood ratio decides.
       if (options.lateral_jump_every > 0 && it % options.lateral_jump_every == 0) {
-        std::vector<int> all_trucks(static_cast<std::size_t>(N));
-        for (int n = 0; n < N; ++n) all_trucks[static_cast<std::size_t>(n)] = n;
         for (int n = 0; n < N; ++n) {
           k_jump[n] = x(n, kStiffness);
           kt_jump[n] = x(n, kTyreStiffness);

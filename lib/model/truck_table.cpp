@@ -74,6 +74,7 @@ NodeResult integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& ifs_by_line, 
   for (std::size_t i = 0; i < zs.size(); ++i) {
     const double ds = ss[i] - smin;
     const double p = ws[i] * std::exp(-0.5 * u_ref * ds);
+    ws[i] = p;  // from here on: the point's share of the node's z-integral (the lateral check reads it)
     sum += p;
     s1 += p * ds;
     s2 += p * ds * ds;
@@ -92,10 +93,8 @@ NodeResult integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& ifs_by_line, 
   r.z_var = std::max(0.0, z2 / sum - r.z_mean * r.z_mean);
   if (lateral) {
     double with_prior = 0.0;
-    for (std::size_t i = 0; i < zs.size(); ++i) {
-      const double p = ws[i] * std::exp(-0.5 * u_ref * (ss[i] - smin));
-      with_prior += p * std::exp(fleet::log_normal_density(zs[i], lateral->mean_m, lateral->sd_m));
-    }
+    for (std::size_t i = 0; i < zs.size(); ++i)
+      with_prior += ws[i] * std::exp(fleet::log_normal_density(zs[i], lateral->mean_m, lateral->sd_m));
     r.lateral_exact = std::log(with_prior / sum);
   }
   return r;
