@@ -14,6 +14,7 @@
 //   cost_curves_benchmark [--latent-trucks 512 (0: skip)] [--budget 900] [--ratio FILE]
 //                         [--latent-curve FILE] [--mcmc-curve FILE]
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -105,16 +106,23 @@ int main(int argc, char** argv) {
       std::cerr << "cost_curves_benchmark: cannot read " << ratio_path << "\n";
       return 66;
     }
-    const nlohmann::json j = nlohmann::json::parse(in);
+    // A ratio_benchmark JSON; anything else is an error naming the file, not a crash.
+    std::vector<std::array<double, 2>> points;  // (trucks, MCMC time to ESS 400)
+    try {
+      const nlohmann::json j = nlohmann::json::parse(in);
+      for (const auto& r : j.at("results")) {
+        const auto& m = r.at("mcmc");
+        points.push_back({r.at("trucks").get<double>(),
+                          m.at("reached_ess_400").get<bool>() ? m.at("time_to_ess_400_s").get<double>()
+                                                              : m.at("extrapolated_time_to_400_s").get<double>()});
+      }
+    } catch (const nlohmann::json::exception& e) {
+      std::cerr << "cost_curves_benchmark: " << ratio_path << ": not a ratio_benchmark result: " << e.what() << "\n";
+      return 65;
+    }
     std::ofstream out(mcmc_curve);
     out << "trucks,mcmc_time_to_400_s,amortised_ms_per_truck,rerun_ms_per_truck\n";
-    for (const auto& r : j.at("results")) {
-      const double n = r.at("trucks").get<double>();
-      const auto& m = r.at("mcmc");
-      const double t = m.at("reached_ess_400").get<bool>() ? m.at("time_to_ess_400_s").get<double>()
-                                                            : m.at("extrapolated_time_to_400_s").get<double>();
-      out << n << "," << t << "," << 1e3 * t / n << "," << 1e3 * t << "\n";
-    }
+    for (const auto& [n, t] : points) out << n << "," << t << "," << 1e3 * t / n << "," << 1e3 * t << "\n";
     std::cerr << "wrote " << mcmc_curve << "\n";
   }
 

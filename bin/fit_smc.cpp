@@ -31,7 +31,7 @@ void FitFlags::add_to(po::options_description& desc) {
        "latent core: MH sweeps over every older truck's latents after each new truck (0 = off)")
       ("window", po::value(&window)->default_value(window),
        "latent core: keep and move only the last W trucks' latents per particle; older ones as sufficient statistics (0 = exact)")
-      ("verbose", po::bool_switch(&verbose), "report every tempering step (phi, ESS, acceptance and jump per block)");
+      ("verbose", po::bool_switch(&verbose), "print the move schedule, then every tempering step (phi, ESS, each scheduled move's runs and acceptance, jump per block)");
   po::options_description mcmc("MCMC options (--method mcmc)");
   mcmc.add_options()
       ("iterations", po::value(&iterations)->default_value(iterations), "MCMC sweeps in all")
