@@ -217,13 +217,19 @@ TEST_CASE("the replay driver runs the schedule's final sweeps after the last tru
   CHECK_THROWS_AS(fleet::replay(*none, c.log.records, no_final), UsageError);
 }
 
-TEST_CASE("the tables check their lateral approximation: within budget on AS1 and flagged on AS2", "[marginal]") {
-  auto mean_error = [](const char* road, const fleet::FleetDistribution& d, double noise, std::string* warning) {
+TEST_CASE("the tables check their lateral approximation: within budget on AS1 and AS2 and flagged without pieces", "[marginal]") {
+  auto mean_error = [](const char* road, const fleet::FleetDistribution& d, double noise, bool pieces,
+                       std::string* warning) {
     const site::Site site(site::load_road(road), site::SiteOptions{});
     const auto trucks = fleet::draw_fleet(d, 30, site.lateral_min_m(), site.lateral_max_m(), 1);
     const auto log = fleet::simulate_log(site, trucks, noise, 1);
     fleet::OnlineFitOptions o;
     o.marginal = options(256, 2, 3);
+    if (!pieces) {
+      // The tables as they were: one moment-matched Gaussian per node, modes judged at the fit alone.
+      o.marginal.target.min_piece_sd_m = 10.0;
+      o.marginal.target.table.mode_margin_nats = 0.0;
+    }
     const auto fit = fleet::make_online_fit(site, o);
     for (const auto& r : log.records) fit->absorb(r);
     *warning = fit->warning();
@@ -233,12 +239,31 @@ TEST_CASE("the tables check their lateral approximation: within budget on AS1 an
   };
   std::string warning;
   // Table 1 on AS1: the sensors pin each truck's z down and the moment matching holds (~1e-4).
-  const double as1 = mean_error("AS1", fleet::FleetDistribution{}, 0.02, &warning);
+  const double as1 = mean_error("AS1", fleet::FleetDistribution{}, 0.02, true, &warning);
   CHECK(as1 < 0.1 * fleet::MarginalSmc::kLateralErrorWarning);
   CHECK(warning.empty());
-  // The second fleet on AS2: z is broad and many-peaked across the lane (0.1-0.2 nats per truck
-  // measured against the brute-force integral), and the fit says so.
-  const double as2 = mean_error("AS2", test::second_fleet(), 0.03, &warning);
-  CHECK(as2 > fleet::MarginalSmc::kLateralErrorWarning);
+  // The second fleet on AS2: z is broad and many-peaked across the lane. Cut into pieces of at most
+  // σ_z / 6 (model/truck_table.hpp, "Pieces") the matching is back within the budget...
+  const double as2 = mean_error("AS2", test::second_fleet(), 0.03, true, &warning);
+  CHECK(as2 < 0.1 * fleet::MarginalSmc::kLateralErrorWarning);
+  CHECK(warning.empty());
+  // ...and with one Gaussian per node it is not (0.1-0.2 nats per truck against the brute-force
+  // integral), and the fit says so.
+  const double as2_one_gaussian = mean_error("AS2", test::second_fleet(), 0.03, false, &warning);
+  CHECK(as2_one_gaussian > fleet::MarginalSmc::kLateralErrorWarning);
   CHECK_THAT(warning, Catch::Contains("lateral") && Catch::Contains("--core latent"));
+}
+
+TEST_CASE("the options that shape the lateral pieces are refused by name when out of range", "[marginal]") {
+  const site::Site site(site::load_road("AS1"), site::SiteOptions{});
+  auto make = [&](auto edit) {
+    fleet::MarginalTarget::Options o;
+    edit(o);
+    return fleet::MarginalTarget(site, o);
+  };
+  CHECK_THROWS_WITH(make([](auto& o) { o.lateral_piece_fraction = 0.0; }), Catch::Contains("lateral_piece_fraction"));
+  CHECK_THROWS_WITH(make([](auto& o) { o.lateral_piece_fraction = 0.8; }), Catch::Contains("lateral_piece_fraction"));
+  CHECK_THROWS_WITH(make([](auto& o) { o.min_piece_sd_m = 0.0; }), Catch::Contains("min_piece_sd_m"));
+  CHECK_THROWS_WITH(make([](auto& o) { o.table.mode_margin_nats = -1.0; }), Catch::Contains("mode_margin_nats"));
+  CHECK_NOTHROW(make([](auto&) {}));
 }

@@ -56,6 +56,13 @@ MarginalTarget::MarginalTarget(const site::Site& site, Options options)
   if (!(options_.lattice_fraction > 0.0 && options_.lattice_fraction <= 1.5)) {
     throw UsageError("MarginalTarget: lattice_fraction must be in (0, 1.5]");
   }
+  // A piece narrower than ~1 mm would cost entries for nothing (the road's lines are centimetres
+  // apart); a fraction above 1/2 of σ_z would leave the matching error near 1e-2 nats per truck.
+  if (!(options_.lateral_piece_fraction > 0.0 && options_.lateral_piece_fraction <= 0.5)) {
+    throw UsageError("MarginalTarget: lateral_piece_fraction must be in (0, 0.5]");
+  }
+  if (!(options_.min_piece_sd_m >= 1e-3)) throw UsageError("MarginalTarget: min_piece_sd_m must be >= 0.001 m");
+  if (!(options_.table.mode_margin_nats >= 0.0)) throw UsageError("MarginalTarget: table.mode_margin_nats must be >= 0");
   theta_.resize(kHyperCount, options_.particles);
   base_sum_ = Eigen::ArrayXd::Zero(options_.particles);
   inc_ = Eigen::ArrayXd::Zero(options_.particles);
@@ -126,6 +133,12 @@ MarginalTarget::TableSettings MarginalTarget::ideal_settings(const Eigen::ArrayX
   return s;
 }
 
+double MarginalTarget::max_piece_sd(const Eigen::ArrayXd& W) const {
+  const double low_sigma_z = weighted_quantile(theta_.row(kSigmaZ), W, 0.1);
+  return std::clamp(options_.lateral_piece_fraction * low_sigma_z, options_.min_piece_sd_m,
+                    std::max(options_.min_piece_sd_m, options_.table.max_piece_sd_m));
+}
+
 model::TruckTableOptions MarginalTarget::table_options(const TableSettings& s) const {
   model::TruckTableOptions o = options_.table;
   o.sigma_ref = s.sigma_ref;
@@ -157,6 +170,7 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
   }
   model::TruckTableOptions o = table_options(now);
   if (trucks() == 0) o.population.reset();
+  o.max_piece_sd_m = max_piece_sd(W);
   if (trucks() > 0) {
     // The table measures its lateral approximation at the fleet's current (Z, σ_z) (a diagnostic:
     // the tables do not depend on it).
@@ -225,7 +239,8 @@ std::string MarginalTarget::rebuild_reason(const Eigen::ArrayXd& W) const {
 void MarginalTarget::begin_rebuild(const Eigen::ArrayXd& W, const smc::ParallelFor& parallel) {
   if (mode_ != Mode::kIdle) throw std::logic_error("MarginalTarget::begin_rebuild: finish_stage() was not called");
   const TableSettings ideal = ideal_settings(W);
-  const model::TruckTableOptions o = table_options(ideal);
+  model::TruckTableOptions o = table_options(ideal);
+  o.max_piece_sd_m = max_piece_sd(W);
   const Eigen::Index n = trucks();
   std::vector<model::TruckTable> tables(static_cast<std::size_t>(n));
   parallel(n, [&](Eigen::Index begin, Eigen::Index end) {

@@ -16,6 +16,12 @@
 // node. So σ_k and σ_kt below kMinSdPerSpacing node spacings are evaluated at that floor (error
 // ~3e-6 there). The lattice follows the posterior (MarginalTarget), so the floor only ever touches
 // particles in the far lower tail of σ_k or σ_kt.
+//
+// Precision. The node sum runs in single precision, like the tables it reads: 1.7-2.4x faster
+// than in double (side by side, 1,000 Table 1 trucks on AS1, 64 particles). Measured against the
+// double sum there: at most 1.6e-6 nats per truck, and the total over 1,000 trucks varies by
+// 2.5e-4 nats (sd) across particles: θ-dependent error, the part that could move a posterior,
+// 2,000 times below the 0.5 nats that one posterior sd changes the log density by.
 #pragma once
 
 #include "model/fleet_model.hpp"

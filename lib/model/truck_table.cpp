@@ -44,10 +44,15 @@ double lateral_gaussian_form(double z_mean, double z_var, double mean, double sd
 
 // The z-integral of exp(-u SSR(z) / 2) over the lines [first, last] of one node's passes, by
 // Gauss–Legendre on each segment. SSR is exactly quadratic on a segment: |e_a - w d|².
-NodeResult integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& ifs_by_line, Eigen::Index first_line,
-                          const road::Surface& surface, const Eigen::Ref<const Eigen::VectorXd>& y, double u_ref,
-                          const util::QuadratureRule& rule,
-                          const std::optional<TruckTableOptions::LateralReference>& lateral) {
+// The node's z-likelihood is returned in pieces of consecutive segments, each with a z-posterior
+// sd of at most max_piece_sd (one piece when the whole node's is below it). FleetMarginal applies
+// the lateral prior to each piece by moment matching, whose error falls like (piece sd / σ_z)⁴:
+// a broad, many-peaked z-likelihood (road AS2) matched as one Gaussian was off by 0.1-0.2 nats
+// per truck; cut into pieces it is exact to the budget (the header, "pieces").
+std::vector<NodeResult> integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& ifs_by_line, Eigen::Index first_line,
+                                       const road::Surface& surface, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                       double u_ref, const util::QuadratureRule& rule, double max_piece_sd,
+                                       const std::optional<TruckTableOptions::LateralReference>& lateral) {
   const Eigen::Index lines = ifs_by_line.cols();
   const double dy = surface.dy_m;
   const std::size_t q = rule.nodes.size();
@@ -67,39 +72,72 @@ NodeResult integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& ifs_by_line, 
       ws.push_back(rule.weights[p] * dy);
     }
   }
-  NodeResult r;
-  if (zs.empty()) return r;
+  if (zs.empty()) return {};
   const double smin = *std::min_element(ss.begin(), ss.end());
-  double sum = 0.0, s1 = 0.0, s2 = 0.0, z1 = 0.0, z2 = 0.0;
-  for (std::size_t i = 0; i < zs.size(); ++i) {
-    const double ds = ss[i] - smin;
-    const double p = ws[i] * std::exp(-0.5 * u_ref * ds);
-    ws[i] = p;  // from here on: the point's share of the node's z-integral (the lateral check reads it)
-    sum += p;
-    s1 += p * ds;
-    s2 += p * ds * ds;
-    z1 += p * zs[i];
-    z2 += p * zs[i] * zs[i];
-  }
-  const double mean_ds = s1 / sum;
-  const double var_s = std::max(0.0, s2 / sum - mean_ds * mean_ds);
-  r.log_i_ref = std::log(sum) - 0.5 * u_ref * smin;
-  // Match value, slope and curvature of log I(u) at u_ref (see the header):
-  // d/du log I = -E[SSR]/2, d²/du² log I = Var[SSR]/4.
-  r.b = 0.25 * var_s * u_ref * u_ref;
-  r.m = (smin + mean_ds) - 2.0 * r.b / u_ref;
-  r.c = r.log_i_ref + 0.5 * r.m * u_ref + r.b * std::log(u_ref);
-  r.z_mean = z1 / sum;
-  r.z_var = std::max(0.0, z2 / sum - r.z_mean * r.z_mean);
-  if (lateral) {
-    double with_prior = 0.0;
-    for (std::size_t i = 0; i < zs.size(); ++i)
-      with_prior += ws[i] * std::exp(fleet::log_normal_density(zs[i], lateral->mean_m, lateral->sd_m));
-    r.lateral_exact = std::log(with_prior / sum);
-  }
-  return r;
-}
+  // From here on ws[i] is the point's share of the node's z-integral (the pieces and the lateral
+  // check read it).
+  for (std::size_t i = 0; i < zs.size(); ++i) ws[i] *= std::exp(-0.5 * u_ref * (ss[i] - smin));
 
+  // One piece: the points [begin, end).
+  auto piece = [&](std::size_t begin, std::size_t end) {
+    NodeResult r;
+    double sum = 0.0, s1 = 0.0, s2 = 0.0, z1 = 0.0, z2 = 0.0;
+    for (std::size_t i = begin; i < end; ++i) {
+      const double ds = ss[i] - smin;
+      const double p = ws[i];
+      sum += p;
+      s1 += p * ds;
+      s2 += p * ds * ds;
+      z1 += p * zs[i];
+      z2 += p * zs[i] * zs[i];
+    }
+    if (!(sum > 0.0)) return r;  // underflowed: carries nothing (log_i_ref = -inf drops it)
+    const double mean_ds = s1 / sum;
+    const double var_s = std::max(0.0, s2 / sum - mean_ds * mean_ds);
+    r.log_i_ref = std::log(sum) - 0.5 * u_ref * smin;
+    // Match value, slope and curvature of log I(u) at u_ref (see the header):
+    // d/du log I = -E[SSR]/2, d²/du² log I = Var[SSR]/4.
+    r.b = 0.25 * var_s * u_ref * u_ref;
+    r.m = (smin + mean_ds) - 2.0 * r.b / u_ref;
+    r.c = r.log_i_ref + 0.5 * r.m * u_ref + r.b * std::log(u_ref);
+    r.z_mean = z1 / sum;
+    r.z_var = std::max(0.0, z2 / sum - r.z_mean * r.z_mean);
+    if (lateral) {
+      double with_prior = 0.0;
+      for (std::size_t i = begin; i < end; ++i)
+        with_prior += ws[i] * std::exp(fleet::log_normal_density(zs[i], lateral->mean_m, lateral->sd_m));
+      r.lateral_exact = std::log(with_prior / sum);
+    }
+    return r;
+  };
+  std::vector<NodeResult> pieces{piece(0, zs.size())};
+  if (!(pieces[0].z_var > max_piece_sd * max_piece_sd)) return pieces;
+
+  // Too broad for one Gaussian: cut between segments, greedily, closing a piece before the segment
+  // that would lift its z-sd above max_piece_sd.
+  pieces.clear();
+  double p0 = 0.0, p1 = 0.0, p2 = 0.0;  // the open piece's Σp, Σpz, Σpz²
+  std::size_t begin = 0;
+  for (std::size_t seg = 0; seg * q < zs.size(); ++seg) {
+    double a0 = 0.0, a1 = 0.0, a2 = 0.0;
+    for (std::size_t i = seg * q; i < (seg + 1) * q; ++i) {
+      a0 += ws[i];
+      a1 += ws[i] * zs[i];
+      a2 += ws[i] * zs[i] * zs[i];
+    }
+    const double n0 = p0 + a0, n1 = p1 + a1, n2 = p2 + a2;
+    const double var = n0 > 0.0 ? n2 / n0 - (n1 / n0) * (n1 / n0) : 0.0;
+    if (seg * q > begin && var > max_piece_sd * max_piece_sd) {
+      pieces.push_back(piece(begin, seg * q));
+      begin = seg * q;
+      p0 = a0, p1 = a1, p2 = a2;
+    } else {
+      p0 = n0, p1 = n1, p2 = n2;
+    }
+  }
+  pieces.push_back(piece(begin, zs.size()));
+  return pieces;
+}
 
 }  // namespace
 
@@ -159,7 +197,7 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
   std::vector<Mode> modes;
   {
     const double best = seg_min.empty() ? 0.0 : *std::min_element(seg_min.begin(), seg_min.end());
-    const double limit = best + 2.0 * options.keep_nats / u_ref;
+    const double limit = best + 2.0 * (options.keep_nats + options.mode_margin_nats) / u_ref;
     std::vector<std::pair<Eigen::Index, Eigen::Index>> runs;  // segment ranges [a, b]
     for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(seg_min.size()); ++j) {
       if (seg_min[static_cast<std::size_t>(j)] > limit) continue;
@@ -216,7 +254,8 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
   table.fit = fit;
   table.passes = fit.passes + table_passes_extra;
   double best_score = -kInf, best_log_i = -kInf;
-  std::vector<std::map<std::pair<int, int>, NodeResult>> evaluated_by_mode(modes.size());
+  // Per mode, per node: the node's pieces (one unless its z-likelihood is broad).
+  std::vector<std::map<std::pair<int, int>, std::vector<NodeResult>>> evaluated_by_mode(modes.size());
   for (std::size_t mi = 0; mi < modes.size(); ++mi) {
     const Mode& mode = modes[mi];
     const Eigen::Index first_line = mode.first_line, lines = mode.last_line - mode.first_line + 1;
@@ -267,15 +306,20 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
       const Eigen::ArrayXXd ifs = simulate(site, speed_mps, sprung_mass_kg, k, kt, z, parallel);
       table.passes += static_cast<int>(k.size());
       for (std::size_t p = 0; p < pending.size(); ++p) {
-        const NodeResult r = integrate_node(ifs.middleCols(static_cast<Eigen::Index>(p) * lines, lines), first_line,
-                                            surface, impact_factors, u_ref, rule, options.lateral_check);
-        evaluated[pending[p]] = r;
-        best_score = std::max(best_score, score(pending[p], r));
-        best_log_i = std::max(best_log_i, r.log_i_ref);
+        std::vector<NodeResult> pieces =
+            integrate_node(ifs.middleCols(static_cast<Eigen::Index>(p) * lines, lines), first_line, surface,
+                           impact_factors, u_ref, rule, options.max_piece_sd_m, options.lateral_check);
+        for (const NodeResult& r : pieces) {
+          best_score = std::max(best_score, score(pending[p], r));
+          best_log_i = std::max(best_log_i, r.log_i_ref);
+        }
+        evaluated[pending[p]] = std::move(pieces);
       }
       std::vector<std::pair<int, int>> next;
-      for (const auto& [ij, r] : evaluated) {
-        if (score(ij, r) < best_score - options.keep_nats) continue;
+      for (const auto& [ij, pieces] : evaluated) {
+        if (!std::any_of(pieces.begin(), pieces.end(),
+                         [&](const NodeResult& r) { return score(ij, r) >= best_score - options.keep_nats; }))
+          continue;
         for (auto [di, dj] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
           const std::pair<int, int> nb{ij.first + di, ij.second + dj};
           if (admissible(nb.first, nb.second) && !evaluated.count(nb) &&
@@ -289,13 +333,17 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
   }
   table.modes = static_cast<int>(modes.size());
 
-  // Keep the nodes above the threshold; the truck's z-posterior variance is their weighted mean.
+  // Keep the pieces above the threshold; the truck's z-posterior variance is their weighted mean.
+  auto for_each_kept = [&](const auto& body) {
+    for (const auto& evaluated : evaluated_by_mode)
+      for (const auto& [ij, pieces] : evaluated)
+        for (const NodeResult& r : pieces)
+          if (score(ij, r) >= best_score - options.keep_nats) body(ij, r);
+  };
   double wsum = 0.0, var_sum = 0.0;
   int evaluated_nodes = 0;
-  for (const auto& evaluated : evaluated_by_mode) {
-  evaluated_nodes += static_cast<int>(evaluated.size());
-  for (const auto& [ij, r] : evaluated) {
-    if (score(ij, r) < best_score - options.keep_nats) continue;
+  for (const auto& evaluated : evaluated_by_mode) evaluated_nodes += static_cast<int>(evaluated.size());
+  for_each_kept([&](const std::pair<int, int>& ij, const NodeResult& r) {
     table.k_index.push_back(ij.first);
     table.kt_index.push_back(ij.second);
     table.c.push_back(static_cast<float>(r.c));
@@ -306,21 +354,17 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
     const double w = std::exp(r.log_i_ref - best_log_i);
     wsum += w;
     var_sum += w * r.z_var;
-  }
-  }
+  });
   table.z_var_ref_m2 = var_sum / wsum;
   if (options.lateral_check) {
-    // log Σ_g w_g exp(d_g), w_g the kept node's share at u_ref with the exact lateral term and the
+    // log Σ_g w_g exp(d_g), w_g the kept piece's share at u_ref with the exact lateral term and the
     // fleet's predictive of (k, k_t), d_g = the Gaussian form minus the exact z-integral.
     const auto& ref = *options.lateral_check;
     std::vector<double> log_w, d;
-    for (const auto& evaluated : evaluated_by_mode) {
-      for (const auto& [ij, r] : evaluated) {
-        if (score(ij, r) < best_score - options.keep_nats) continue;
-        log_w.push_back(score(ij, r) + r.lateral_exact);
-        d.push_back(lateral_gaussian_form(r.z_mean, r.z_var, ref.mean_m, ref.sd_m) - r.lateral_exact);
-      }
-    }
+    for_each_kept([&](const std::pair<int, int>& ij, const NodeResult& r) {
+      log_w.push_back(score(ij, r) + r.lateral_exact);
+      d.push_back(lateral_gaussian_form(r.z_mean, r.z_var, ref.mean_m, ref.sd_m) - r.lateral_exact);
+    });
     const double top = *std::max_element(log_w.begin(), log_w.end());
     double num = 0.0, den = 0.0;
     for (std::size_t g = 0; g < d.size(); ++g) {

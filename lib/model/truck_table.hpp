@@ -18,6 +18,12 @@
 // truck's z-posterior variance s²(u) = s²_ref u_ref / u (moment matching:
 // ∫ f(z) N(z | Z, σ_z²) dz = I · N(ẑ | Z, σ_z² + s²) for a Gaussian f).
 //
+// Pieces. Where the sensors leave a truck's z broad and many-peaked across the lane (road AS2: a
+// node's z-posterior sd up to 0.66 m against σ_z = 0.35 m), one Gaussian per node is not enough:
+// the matched form was off by 0.1-0.2 nats per truck and biased σ_z by 20 posterior sd. Such a
+// node's z-range is cut into pieces, each with its own (c, m, b, ẑ, s²), and the node sum adds
+// them: ∫ f N = Σ_p ∫_p f N, each piece matched on its own. A node narrower than the limit (road
+// AS1: all of them) stays one entry, so its bits and cost do not change.
 // Which nodes. Those whose log I_g(u_ref) is within `keep_nats` of the best node's: the rest
 // carry less than ~e^-keep_nats of the truck's likelihood and are dropped.
 // Files: the best-fit search is truck_fit.cpp, the table build and the brute-force reference are
@@ -75,6 +81,15 @@ struct TruckTableOptions {
   // keep_nats of the best (a lateral mode) is tabulated on its own lines, widened by this many
   // lines each side (a node's z-optimum moves a few mm to cm with (k, k_t)).
   int z_margin_lines = 2;
+  // A lateral run counts as a mode if its least SSR at the fit's (k, k_t) is within keep_nats plus
+  // this of the best: the mode's own best (k, k_t) can lie a few nats higher than the fit's view of
+  // it (road AS2: two modes missed at a margin of 0 carried 0.6 % of a truck's likelihood).
+  double mode_margin_nats = 8.0;
+  // A node whose z-likelihood is broader than this (its z-posterior sd at u_ref) is tabulated in
+  // pieces of consecutive segments, each at most this broad, one entry per piece (the header,
+  // "Pieces"). The lateral prior's moment matching errs by about (piece sd / σ_z)⁴ / 100 nats at
+  // most, so a quarter of the fleet's σ_z is plenty; MarginalTarget sets it so.
+  double max_piece_sd_m = 0.1;
   // If set, the table measures its own lateral approximation here (TruckTable::lateral_error_nats):
   // the fleet's current (Z, σ_z), e.g. the posterior means.
   struct LateralReference {
