@@ -61,6 +61,12 @@ MarginalTarget::MarginalTarget(const site::Site& site, Options options)
   if (!(options_.lateral_piece_fraction > 0.0 && options_.lateral_piece_fraction <= 0.5)) {
     throw UsageError("MarginalTarget: lateral_piece_fraction must be in (0, 0.5]");
   }
+  if (!(options_.lattice_sd_quantile > 0.0 && options_.lattice_sd_quantile <= 0.5)) {
+    throw UsageError("MarginalTarget: lattice_sd_quantile must be in (0, 0.5]");
+  }
+  if (!(options_.lattice_sd_min_of_median > 0.0 && options_.lattice_sd_min_of_median <= 1.0)) {
+    throw UsageError("MarginalTarget: lattice_sd_min_of_median must be in (0, 1]");
+  }
   if (!(options_.min_piece_sd_m >= 1e-3)) throw UsageError("MarginalTarget: min_piece_sd_m must be >= 0.001 m");
   if (!(options_.table.mode_margin_nats >= 0.0)) throw UsageError("MarginalTarget: table.mode_margin_nats must be >= 0");
   theta_.resize(kHyperCount, options_.particles);
@@ -114,8 +120,16 @@ MarginalTarget::TableSettings MarginalTarget::ideal_settings(const Eigen::ArrayX
   // the fleet sd (posterior median; particles far below it meet FleetMarginal's floor).
   const double lik_k = std::exp(sum_log_sd_k_ / static_cast<double>(n)) * s.sigma_ref;
   const double lik_kt = std::exp(sum_log_sd_kt_ / static_cast<double>(n)) * s.sigma_ref;
-  const double fleet_k = weighted_quantile(theta_.row(kSigmaK), W, 0.5);
-  const double fleet_kt = weighted_quantile(theta_.row(kSigmaKt), W, 0.5);
+  // The fleet sd the lattice must resolve: a low quantile of its posterior, not the median, so that
+  // FleetMarginal's floor (0.8 spacings) sits below the posterior's lower tail (Options); never
+  // below a fraction of the median, so a broad early posterior does not make the lattice explode.
+  auto resolved_sd = [&](int h) {
+    const double median = weighted_quantile(theta_.row(h), W, 0.5);
+    return std::max(weighted_quantile(theta_.row(h), W, options_.lattice_sd_quantile),
+                    options_.lattice_sd_min_of_median * median);
+  };
+  const double fleet_k = resolved_sd(kSigmaK);
+  const double fleet_kt = resolved_sd(kSigmaKt);
   const double width_k = 1.0 / std::sqrt(1.0 / (lik_k * lik_k) + 1.0 / (fleet_k * fleet_k));
   const double width_kt = 1.0 / std::sqrt(1.0 / (lik_kt * lik_kt) + 1.0 / (fleet_kt * fleet_kt));
   s.lattice.dk_npm = options_.lattice_fraction * width_k;

@@ -48,7 +48,7 @@ double lateral_gaussian_form(double z_mean, double z_var, double mean, double sd
 // sd of at most max_piece_sd (one piece when the whole node's is below it). FleetMarginal applies
 // the lateral prior to each piece by moment matching, whose error falls like (piece sd / σ_z)⁴:
 // a broad, many-peaked z-likelihood (road AS2) matched as one Gaussian was off by 0.1-0.2 nats
-// per truck; cut into pieces it is exact to the budget (the header, "pieces").
+// per truck; cut into pieces it is exact to the budget (truck_table.hpp, "Pieces").
 std::vector<NodeResult> integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& ifs_by_line, Eigen::Index first_line,
                                        const road::Surface& surface, const Eigen::Ref<const Eigen::VectorXd>& y,
                                        double u_ref, const util::QuadratureRule& rule, double max_piece_sd,
