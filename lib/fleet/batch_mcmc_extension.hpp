@@ -63,8 +63,10 @@ class AdaptiveWalk {
 // length have no likelihood, so nothing pulls the walk towards the defect; 50 trucks, 25,000 kept
 // sweeps: position ESS 6, sigma_IF 14 posterior sd above the SMC's). With an extension that edits
 // the forward model every candidate re-simulates every truck (N passes each); ssr follows the
-// chosen ψ. Returns the number of passes simulated.
-long long choose_psi_start(const ModelExtension& extension, const BatchMcmcOptions& options, const HyperVector& theta,
+// chosen ψ. With one that only replaces the stiffness distribution, (K, σ_k) join the Halton set
+// and 64 times as many candidates are scored (no simulation: N densities each); theta's K and σ_k
+// follow the chosen candidate. Returns the number of passes simulated.
+long long choose_psi_start(const ModelExtension& extension, const BatchMcmcOptions& options, HyperVector& theta,
                            const Eigen::MatrixXd& latents, Eigen::ArrayXd& ssr, ResidualEvaluator& evaluator,
                            const std::vector<int>& all, std::vector<double>& psi);
 
