@@ -297,6 +297,21 @@ Moments weighted_moments(const Eigen::VectorXd& x, const Eigen::ArrayXd& w) {
 // (otherwise a 0.25 sd threshold could not tell a real disagreement from noise, and the test says
 // so rather than passing), then the offset to be under 0.25 sd: at least 3 Monte Carlo sd, so a
 // failure flags a difference between the samplers' posteriors, not their noise.
+//
+// Measured (commit of this comment, 2 cores shared, 730 s in all; 50 trucks, 1024 particles and
+// 50 final sweeps per SMC run, 30,000 MCMC sweeps of which 25,000 kept; largest |offset| over the
+// 7 + d parameters, and the Monte Carlo sd it is judged against):
+//   sensor_gain 0.05 sd, suspension_damping 0.11, tyre_damping 0.06, unsprung_mass 0.05: pass
+//   (MCMC ESS >= 200, SMC se <= 0.03 sd);
+//   speed_bias 0.29 (sigma_kt) and <= 0.07 elsewhere: the SMC's own error is too large for the
+//   check (its two seeds differ by 0.41 sd on sigma_kt, pooled se 0.094 sd > 0.083);
+//   profile_defect <= 0.15 sd, but both samplers are far from precise along the defect's
+//   length-height ridge (MCMC ESS 7 on height, 10 on length; the SMC's seeds differ by 1.07 sd on
+//   height): fails the Monte Carlo check;
+//   second_class: a real disagreement, sigma_IF 4.2 sd, K 1.8 sd, sigma_kt 1.1 sd: in the MCMC one
+//   stiff truck (k 1.23e6 N/m in the data) stays in another joint (k, k_t, z) mode, k 3.8e5 at
+//   z 2.11 m instead of 0.95 m, which the random walk and the lateral jumps (z alone) cannot leave;
+//   the SMC's two seeds also differ by 3.0 sd on K (the weight of the class-swapped mode).
 TEST_CASE("the latent SMC and the batch MCMC agree on every extension's posterior within a quarter sd",
           "[fleet][mcmc][smc][extension][long]") {
   constexpr int kTrucks = 50;
