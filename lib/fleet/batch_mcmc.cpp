@@ -1,21 +1,25 @@
+// The batch MCMC's chain (batch_mcmc.hpp): one sweep after another, the latents, θ and, with an
+// extension, ψ; the kept draws and their summaries. Where it starts is batch_mcmc_start.cpp, its
+// option rules batch_mcmc_options.cpp, an extension's steps batch_mcmc_extension.cpp.
 #include "fleet/batch_mcmc.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <sstream>
+#include <optional>
 #include <thread>
 
 #include <Eigen/Cholesky>
 #include <boost/random/mersenne_twister.hpp>
 #include <boost/random/normal_distribution.hpp>
 
+#include "fleet/batch_mcmc_extension.hpp"
 #include "fleet/batch_mcmc_interweave.hpp"
 #include "fleet/batch_mcmc_residuals.hpp"
+#include "fleet/batch_mcmc_start.hpp"
+#include "model/extension_conditionals.hpp"
 #include "model/fleet_conditionals.hpp"
-#include "model/truck_table.hpp"
-#include "smc/engine.hpp"
 #include "model/truncated_samplers.hpp"
 #include "util/errors.hpp"
 
@@ -23,26 +27,22 @@ namespace ssrfleet::fleet {
 
 namespace {
 
+using detail::ChainStart;
+using detail::choose_psi_start;
+using detail::ExtensionSteps;
 using detail::gather;
 using detail::Observations;
 using detail::ResidualEvaluator;
+using detail::start_chain;
 
 using Engine = boost::random::mt19937_64;
 using Clock = std::chrono::steady_clock;
-constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
 double log_uniform(Engine& engine) { return std::log(uniform_open01(engine)); }
-
-double clip(double v, double lo, double hi) { return std::clamp(v, lo, hi); }
-
-double column_sd(const Eigen::VectorXd& v) {
-  if (v.size() < 2) return 0.0;
-  return std::sqrt((v.array() - v.mean()).square().sum() / static_cast<double>(v.size() - 1));
-}
 
 // Running mean and covariance (Welford) of a small vector.
 template <int D>
@@ -82,79 +82,6 @@ int sigma_mh(Engine& engine, double& sigma, int n, double sum_squares, double lo
 
 }  // namespace
 
-#define SSRFLEET_OPTION_CHECK(cond, name, value, rule)                                       \
-  do {                                                                                       \
-    if (!(cond)) {                                                                           \
-      if (error) {                                                                           \
-        std::ostringstream os;                                                               \
-        os << "BatchMcmcOptions: " << name << " is " << (value) << ", but must be " << rule; \
-        *error = os.str();                                                                   \
-      }                                                                                      \
-      return false;                                                                          \
-    }                                                                                        \
-  } while (false)
-
-bool BatchMcmcOptions::IsValid(std::string* error) const {
-  SSRFLEET_OPTION_CHECK(iterations >= 1, "iterations", iterations, ">= 1");
-  SSRFLEET_OPTION_CHECK(burn_in >= 0, "burn_in", burn_in, ">= 0");
-  SSRFLEET_OPTION_CHECK(burn_in < iterations, "burn_in", burn_in,
-                        "< iterations (" + std::to_string(iterations) + "), or no draw is kept");
-  SSRFLEET_OPTION_CHECK(thin >= 1, "thin", thin, ">= 1");
-  SSRFLEET_OPTION_CHECK(target_acceptance > 0.0 && target_acceptance < 1.0, "target_acceptance",
-                        target_acceptance, "in (0, 1)");
-  SSRFLEET_OPTION_CHECK(z_moves_per_sweep >= 1, "z_moves_per_sweep", z_moves_per_sweep, ">= 1");
-  SSRFLEET_OPTION_CHECK(std::isfinite(init_grid_step_m) && init_grid_step_m > 0.0, "init_grid_step_m",
-                        init_grid_step_m, "positive");
-  SSRFLEET_OPTION_CHECK(hold_theta_sweeps >= 0, "hold_theta_sweeps", hold_theta_sweeps, ">= 0");
-  SSRFLEET_OPTION_CHECK(progress_every >= 0, "progress_every", progress_every, ">= 0");
-  for (int j = 0; j < kHyperCount; ++j) {
-    const std::string name = "prior bounds of " + std::string(kHyperNames[static_cast<std::size_t>(j)]);
-    std::ostringstream value;
-    value << "[" << prior.lo[static_cast<std::size_t>(j)] << ", " << prior.hi[static_cast<std::size_t>(j)]
-          << "]";
-    SSRFLEET_OPTION_CHECK(std::isfinite(prior.lo[static_cast<std::size_t>(j)]) &&
-                              std::isfinite(prior.hi[static_cast<std::size_t>(j)]) &&
-                              prior.lo[static_cast<std::size_t>(j)] < prior.hi[static_cast<std::size_t>(j)],
-                          name, value.str(), "a finite interval with lo < hi");
-  }
-  for (int j : {kSigmaK, kSigmaKt, kSigmaZ, kSigmaIf}) {
-    const std::string name = "lower prior bound of " + std::string(kHyperNames[static_cast<std::size_t>(j)]);
-    SSRFLEET_OPTION_CHECK(prior.lo[static_cast<std::size_t>(j)] > 0.0, name,
-                          prior.lo[static_cast<std::size_t>(j)], "positive (a scale)");
-  }
-  if (initial_theta) {
-    SSRFLEET_OPTION_CHECK(prior.contains(*initial_theta), "initial_theta", "(outside the prior box)",
-                          "inside the prior box");
-  }
-  if (initial_latents) {
-    SSRFLEET_OPTION_CHECK(initial_latents->cols() == kLatentCount, "initial_latents columns",
-                          initial_latents->cols(), "3 (k, kt, z)");
-    SSRFLEET_OPTION_CHECK(initial_latents->allFinite(), "initial_latents", "(not all finite)", "finite");
-  }
-  SSRFLEET_OPTION_CHECK(!freeze_latents || initial_latents.has_value(), "freeze_latents", "true",
-                        "false unless initial_latents is given");
-  SSRFLEET_OPTION_CHECK(ancillary_steps >= 1, "ancillary_steps", ancillary_steps, ">= 1");
-  SSRFLEET_OPTION_CHECK(ancillary_every >= 1, "ancillary_every", ancillary_every, ">= 1");
-  SSRFLEET_OPTION_CHECK(lateral_jump_every >= 0, "lateral_jump_every", lateral_jump_every, ">= 0");
-  SSRFLEET_OPTION_CHECK(threads >= 0, "threads", threads, ">= 0 (0 = all hardware threads)");
-  return true;
-}
-
-#undef SSRFLEET_OPTION_CHECK
-
-double log_posterior_unnormalised(const HyperVector& theta, const Eigen::Ref<const Eigen::MatrixXd>& latents,
-                                  const Eigen::Ref<const Eigen::VectorXd>& ssr, int sensors,
-                                  const PriorBounds& prior, const LateralRange& range) {
-  double lp = prior.log_prior(theta);
-  if (!std::isfinite(lp)) return kNegInf;
-  for (Eigen::Index n = 0; n < latents.rows(); ++n) {
-    lp += log_latent_density(latents(n, kStiffness), latents(n, kTyreStiffness), latents(n, kLateral), theta,
-                             range);
-    lp += log_likelihood_from_ssr(ssr[n], sensors, theta[kSigmaIf]);
-  }
-  return lp;
-}
-
 BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
                                const BatchMcmcOptions& options) {
   const Clock::time_point start = Clock::now();
@@ -164,18 +91,22 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
   const int N = obs.trucks, M = obs.sensors;
   const PriorBounds& prior = options.prior;
   const LateralRange range{site.lateral_min_m(), site.lateral_max_m()};
-  if (options.initial_latents && options.initial_latents->rows() != N) {
-    throw UsageError("BatchMcmcOptions: initial_latents has " +
-                     std::to_string(options.initial_latents->rows()) + " rows, but there are " +
-                     std::to_string(N) + " trucks");
+  const ModelExtension* extension = options.extension;
+  // ψ (empty without an extension): where it starts, and the pointer every simulation reads it by.
+  std::vector<double> psi0;
+  if (extension != nullptr) {
+    if (options.initial_psi) psi0 = *options.initial_psi;
+    else
+      for (const auto& p : extension->parameters()) psi0.push_back(p.null_value);
   }
+  const bool stiffness_edited = edits_stiffness(extension);
 
   Engine engine(options.seed);
   boost::random::normal_distribution<double> normal(0.0, 1.0);
   const int threads = options.threads > 0
                           ? options.threads
                           : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  ResidualEvaluator evaluator(site, obs, threads);
+  ResidualEvaluator evaluator(site, obs, threads, extension);
 
   BatchMcmcResult result;
   result.threads = threads;
@@ -185,101 +116,24 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
   for (const auto& r : records) result.truck_ids.push_back(r.truck_id);
 
   // ---- initialisation ----
-  auto box_centre = [&](int j) {
-    return std::sqrt(prior.lo[static_cast<std::size_t>(j)] * prior.hi[static_cast<std::size_t>(j)]);
-  };
-  auto clip_to_box = [&](int j, double v) {
-    return clip(v, prior.lo[static_cast<std::size_t>(j)], prior.hi[static_cast<std::size_t>(j)]);
-  };
-  Eigen::MatrixXd x(N, kLatentCount);  // latents, one row per truck
-  Eigen::ArrayXd ssr(N);
-  std::vector<int> all(static_cast<std::size_t>(N));
+  std::vector<int> all(static_cast<std::size_t>(N));  // every truck's index
   for (int n = 0; n < N; ++n) all[static_cast<std::size_t>(n)] = n;
-  const double k0 = options.initial_theta ? (*options.initial_theta)[kK] : box_centre(kK);
-  const double kt0 = options.initial_theta ? (*options.initial_theta)[kKt] : box_centre(kKt);
-  if (options.initial_latents) {
-    x = *options.initial_latents;
-    for (int n = 0; n < N; ++n) {
-      if (!(x(n, kStiffness) > 0.0 && x(n, kTyreStiffness) > 0.0 && x(n, kLateral) >= range.lo_m &&
-            x(n, kLateral) <= range.hi_m)) {
-        throw UsageError("BatchMcmcOptions: initial_latents row " + std::to_string(n) +
-                         " has a non-positive stiffness or a lateral position off the road");
-      }
-    }
-    evaluator.evaluate(all, x.col(kStiffness).array(), x.col(kTyreStiffness).array(), x.col(kLateral).array(),
-                       ssr);
-  } else if (options.init == BatchMcmcOptions::Init::kBestFit) {
-    // Every truck at its own best fit (independent per truck, so the threads change no bit).
-    model::TruckTableOptions search;
-    search.k_start_npm = k0;
-    search.kt_start_npm = kt0;
-    const smc::ParallelFor fits(options.threads > 0 ? options.threads : smc::TemperedSampler::Options::default_threads());
-    std::vector<int> fit_passes(static_cast<std::size_t>(N), 0);
-    fits(N, [&](Eigen::Index begin, Eigen::Index end) {
-      for (Eigen::Index n = begin; n < end; ++n) {
-        const auto& r = records[static_cast<std::size_t>(n)];
-        const model::TruckFit f = model::fit_truck(site, r.speed_mps, r.sprung_mass_kg, r.impact_factor, search);
-        x(n, kStiffness) = f.stiffness_npm;
-        x(n, kTyreStiffness) = f.tyre_stiffness_npm;
-        x(n, kLateral) = std::clamp(f.lateral_m, range.lo_m, range.hi_m);
-        fit_passes[static_cast<std::size_t>(n)] = f.passes;
-      }
-    });
-    for (int p : fit_passes) result.integrator_passes += p;
-    evaluator.evaluate(all, x.col(kStiffness).array(), x.col(kTyreStiffness).array(), x.col(kLateral).array(), ssr);
-  } else {
-    // Coarse grid search over z with k, kt at generic values (see the header).
-    std::vector<double> grid;
-    for (int g = 0;; ++g) {
-      const double z = range.lo_m + g * options.init_grid_step_m;
-      if (z > range.hi_m + 1e-9) break;
-      grid.push_back(std::min(z, range.hi_m));
-    }
-    const auto G = static_cast<Eigen::Index>(grid.size());
-    std::vector<int> which;
-    which.reserve(static_cast<std::size_t>(N * G));
-    Eigen::ArrayXd k_grid(N * G), kt_grid(N * G), z_grid(N * G);
-    for (int n = 0; n < N; ++n) {
-      for (Eigen::Index g = 0; g < G; ++g) {
-        const Eigen::Index i = n * G + g;
-        which.push_back(n);
-        k_grid[i] = k0;
-        kt_grid[i] = kt0;
-        z_grid[i] = grid[static_cast<std::size_t>(g)];
-      }
-    }
-    Eigen::ArrayXd ssr_grid;
-    evaluator.evaluate(which, k_grid, kt_grid, z_grid, ssr_grid);
-    for (int n = 0; n < N; ++n) {
-      Eigen::Index best = 0;
-      ssr_grid.segment(n * G, G).minCoeff(&best);
-      x(n, kStiffness) = k0;
-      x(n, kTyreStiffness) = kt0;
-      x(n, kLateral) = grid[static_cast<std::size_t>(best)];
-      ssr[n] = ssr_grid[n * G + best];
-    }
+  ChainStart chain_start = start_chain(site, records, options, obs, evaluator, extension ? psi0.data() : nullptr);
+  Eigen::MatrixXd& x = chain_start.latents;  // latents, one row per truck
+  Eigen::ArrayXd& ssr = chain_start.ssr;
+  HyperVector theta = chain_start.theta;
+  result.integrator_passes += chain_start.fit_passes;
+  if (extension != nullptr && !options.initial_psi) {
+    choose_psi_start(*extension, options, theta, x, ssr, evaluator, all, psi0);
   }
   result.init_seconds = seconds_since(start);
-
-  HyperVector theta{};
-  if (options.initial_theta) {
-    theta = *options.initial_theta;
-  } else {
-    const Eigen::VectorXd z = x.col(kLateral);
-    // Latents that come from the data (given, or each truck's best fit) set θ's start too.
-    const bool from_data = options.initial_latents || options.init == BatchMcmcOptions::Init::kBestFit;
-    theta[kK] = clip_to_box(kK, from_data ? x.col(kStiffness).mean() : k0);
-    theta[kKt] = clip_to_box(kKt, from_data ? x.col(kTyreStiffness).mean() : kt0);
-    const double sk = from_data && N > 2 ? column_sd(x.col(kStiffness)) : 0.2 * theta[kK];
-    const double skt = from_data && N > 2 ? column_sd(x.col(kTyreStiffness)) : 0.2 * theta[kKt];
-    theta[kSigmaK] = clip_to_box(kSigmaK, sk);
-    theta[kSigmaKt] = clip_to_box(kSigmaKt, skt);
-    theta[kZ] = clip_to_box(kZ, z.mean());
-    theta[kSigmaZ] = clip_to_box(kSigmaZ, N > 2 ? column_sd(z) : 0.5);
-    theta[kSigmaIf] = clip_to_box(kSigmaIf, std::sqrt(ssr.sum() / (static_cast<double>(N) * M)));
-  }
   result.initial_theta = theta;
   result.initial_latents = x;
+  result.initial_psi = psi0;
+  // ψ's steps (step 5 of the header); every simulation reads the current ψ through psi_now().
+  std::optional<ExtensionSteps> extension_steps;
+  if (extension != nullptr) extension_steps.emplace(*extension, psi0, options, theta, N);
+  const auto psi_now = [&]() -> const double* { return extension_steps ? extension_steps->psi().data() : nullptr; };
 
   // ---- proposal state (adapted during burn-in, frozen afterwards) ----
   const double default_log_scale = std::log(2.38 / std::sqrt(3.0));
@@ -303,6 +157,7 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
   const int kept = (options.iterations - options.burn_in + options.thin - 1) / options.thin;
   result.theta_draws.resize(kept, kHyperCount);
   result.log_target.resize(kept);
+  result.psi_draws.resize(kept, extension != nullptr ? extension->dim() : 0);
   Eigen::ArrayXd accepted_after_burn_in = Eigen::ArrayXd::Zero(N);
   long long z_accepted_after = 0, z_tried_after = 0;
   long long sk_acc = 0, sk_try = 0, skt_acc = 0, skt_try = 0, sif_acc = 0, sif_try = 0;
@@ -318,8 +173,6 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
   Eigen::ArrayXd k_prop, kt_prop, z_prop, ssr_prop;
   Eigen::ArrayXd k_jump(N), kt_jump(N), z_jump(N), ssr_jump(N);
   long long lateral_jumps_accepted = 0, lateral_jumps_tried = 0;
-  std::vector<int> all_trucks(static_cast<std::size_t>(N));  // a lateral jump proposes for every truck
-  for (int n = 0; n < N; ++n) all_trucks[static_cast<std::size_t>(n)] = n;
 
   // Interweaving: one ancillary updater per interwoven block, and the SSR of every truck with
   // one latent coordinate replaced (the other two at their current values).
@@ -333,7 +186,7 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
       const Eigen::ArrayXd kt =
           latent == kTyreStiffness ? values : Eigen::ArrayXd(x.col(kTyreStiffness).array());
       const Eigen::ArrayXd z = latent == kLateral ? values : Eigen::ArrayXd(x.col(kLateral).array());
-      evaluator.evaluate(all, k, kt, z, ssr_out);
+      evaluator.evaluate(all, k, kt, z, psi_now(), ssr_out);
     };
   };
   const AncillarySsrFunction ssr_with_k = ssr_with(kStiffness), ssr_with_kt = ssr_with(kTyreStiffness),
@@ -380,16 +233,19 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
         kt_prop[i] = proposal(n, kTyreStiffness);
         z_prop[i] = proposal(n, kLateral);
       }
-      if (V > 0) evaluator.evaluate(valid, k_prop, kt_prop, z_prop, ssr_prop);
+      if (V > 0) evaluator.evaluate(valid, k_prop, kt_prop, z_prop, psi_now(), ssr_prop);
       const double inv2var_if = 0.5 / (theta[kSigmaIf] * theta[kSigmaIf]);
+      // k's fleet density: N(K, sigma_k^2), or an extension's stiffness distribution.
+      const auto log_k = [&](double k) {
+        return log_stiffness_density(extension, psi_now(), k, theta[kK], theta[kSigmaK]);
+      };
       Eigen::ArrayXd accept_prob = Eigen::ArrayXd::Zero(N);
       for (Eigen::Index i = 0; i < V; ++i) {
         const int n = valid[static_cast<std::size_t>(i)];
         // The truncation normaliser of z depends on theta only and cancels here.
         const double log_alpha =
             -(ssr_prop[i] - ssr[n]) * inv2var_if +
-            log_normal_density(proposal(n, kStiffness), theta[kK], theta[kSigmaK]) -
-            log_normal_density(x(n, kStiffness), theta[kK], theta[kSigmaK]) +
+            log_k(proposal(n, kStiffness)) - log_k(x(n, kStiffness)) +
             log_normal_density(proposal(n, kTyreStiffness), theta[kKt], theta[kSigmaKt]) -
             log_normal_density(x(n, kTyreStiffness), theta[kKt], theta[kSigmaKt]) +
             log_normal_density(proposal(n, kLateral), theta[kZ], theta[kSigmaZ]) -
@@ -411,7 +267,7 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
           kt_jump[n] = x(n, kTyreStiffness);
           z_jump[n] = draw_truncated_normal(engine, theta[kZ], theta[kSigmaZ], range.lo_m, range.hi_m);
         }
-        evaluator.evaluate(all_trucks, k_jump, kt_jump, z_jump, ssr_jump);
+        evaluator.evaluate(all, k_jump, kt_jump, z_jump, psi_now(), ssr_jump);
         const double inv2var = 0.5 / (theta[kSigmaIf] * theta[kSigmaIf]);
         for (int n = 0; n < N; ++n) {
           const double log_alpha = -(ssr_jump[n] - ssr[n]) * inv2var;
@@ -476,7 +332,12 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
       };
       const bool collect = burning_in && it >= adapt_start;
       const bool ancillary_sweep = interweave && it % options.ancillary_every == 0;
-      mean_and_scale(x.col(kStiffness), kK, kSigmaK, sk_acc, sk_try);
+      if (stiffness_edited) {
+        // No conjugate step under an extension's stiffness distribution: MH on its conditional.
+        extension_steps->stiffness_steps(engine, theta, x, burning_in, collect);
+      } else {
+        mean_and_scale(x.col(kStiffness), kK, kSigmaK, sk_acc, sk_try);
+      }
       if (ancillary_sweep && options.interweave_stiffness)
         ancillary_steps(ancillary_k, kStiffness, ssr_with_k, burning_in, collect);
       mean_and_scale(x.col(kTyreStiffness), kKt, kSigmaKt, skt_acc, skt_try);
@@ -538,6 +399,9 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
             sigma_mh(engine, theta[kSigmaIf], n_obs, ssr.sum(), prior.lo[kSigmaIf], prior.hi[kSigmaIf], 5);
         sif_try += 5;
       }
+
+      // ψ: the extension's jump and random walk (after θ, so without an extension nothing is drawn).
+      if (extension_steps) extension_steps->psi_steps(engine, it, theta, x, ssr, evaluator, all, burning_in, collect);
     }
 
     // ---- record ----
@@ -546,7 +410,9 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
       if ((it - options.burn_in) % options.thin == 0) {
         for (int j = 0; j < kHyperCount; ++j)
           result.theta_draws(kept_index, j) = theta[static_cast<std::size_t>(j)];
-        result.log_target[kept_index] = log_posterior_unnormalised(theta, x, ssr.matrix(), M, prior, range);
+        result.log_target[kept_index] =
+            log_posterior_unnormalised(theta, x, ssr.matrix(), M, prior, range, extension, psi_now());
+        for (Eigen::Index j = 0; j < result.psi_draws.cols(); ++j) result.psi_draws(kept_index, j) = psi_now()[j];
         ++kept_index;
       }
     }
@@ -576,6 +442,11 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
   result.z_acceptance =
       z_tried_after > 0 ? static_cast<double>(z_accepted_after) / static_cast<double>(z_tried_after) : 0.0;
   result.sigma_k_acceptance = sk_try > 0 ? static_cast<double>(sk_acc) / static_cast<double>(sk_try) : 1.0;
+  if (extension_steps) {
+    result.psi_acceptance = extension_steps->walk_acceptance();
+    result.psi_jump_acceptance = extension_steps->jump_acceptance();
+    if (stiffness_edited) result.sigma_k_acceptance = result.stiffness_acceptance = extension_steps->stiffness_acceptance();
+  }
   result.sigma_kt_acceptance =
       skt_try > 0 ? static_cast<double>(skt_acc) / static_cast<double>(skt_try) : 1.0;
   result.sigma_if_acceptance =

@@ -17,6 +17,19 @@
 //     so no integrator call is needed. With n < 2 the shape is not positive: random-walk MH.
 //  4. (Z, sigma_z): the truncation of z_n to the road makes the normaliser depend on both, so
 //     there is no conjugate form: `z_moves_per_sweep` joint random-walk MH steps (cheap, O(N)).
+//  5. With a model extension (`extension`, model_extension.hpp; DESIGN.md §6), its parameters ψ
+//     (uniform on their box) join the chain, and every simulated pass goes through the extended
+//     forward model the latent SMC core uses (model/extended_forward.hpp). Each sweep after the
+//     θ steps: if the extension has a jump between distant modes (ModelExtension::jump), one
+//     jump every `psi_jump_every` sweeps; then `psi_moves_per_sweep` random-walk MH steps on ψ
+//     (proposal covariance and scale adapted in burn-in only, then frozen). A step of an extension
+//     that edits the forward model re-simulates every truck (one batched call of N passes); one
+//     that does not needs no simulation. An extension that replaces the stiffness distribution
+//     (second_class) changes the density of every k: the latent step's acceptance uses it, and
+//     (K, sigma_k) lose their Gibbs step (2. above) for `stiffness_moves_per_sweep` random-walk
+//     MH steps on their conditional, ψ joining them when ψ does not edit the forward model (as
+//     in the SMC target's "stiffness distribution" move). The densities are shared with the SMC
+//     target (model/extension_conditionals.hpp). batch_mcmc_extension.hpp holds these steps.
 //  Interweaving (`interweave`, batch_mcmc_interweave.hpp): after the centred update of a chosen
 //  pair among (K, sigma_k), (K_t, sigma_kt), (Z, sigma_z) above, `ancillary_steps` MH steps of the
 //  same pair with the standardised latents (x_n - mean) / sd held fixed instead of the latents
@@ -38,9 +51,15 @@
 //    spread out under the data before sigma_k, sigma_kt see them (all latents start equal, and a
 //    sigma drawn from a zero spread sits at the bottom of its box: the hierarchical funnel).
 //
+// Files: batch_mcmc.cpp (the sweep), batch_mcmc_start.cpp (initialisation), batch_mcmc_options.cpp
+// (option checks, the log posterior), batch_mcmc_extension.cpp (ψ and an extension's stiffness
+// distribution), batch_mcmc_interweave.cpp (ancillary steps), batch_mcmc_residuals.cpp (the
+// batched forward model).
+//
 // Every random number comes from one Boost mt19937_64 seeded with `seed`, drawn on the calling
 // thread in a fixed order: the same seed gives the same chain on every machine (for a given Boost
-// version) and at every thread count. Only the batched integrator calls, where the time goes, are
+// version) and at every thread count. Without an extension no ψ step draws anything, so the chain is
+// the one of ssrfleet before extensions entered it, bit for bit. Only the batched integrator calls, where the time goes, are
 // split over `threads` threads (trucks are independent; the split is at the integrator's 16-truck
 // block boundaries, and each truck's result does not depend on its batch). The library prints
 // nothing: progress goes to a callback.
@@ -55,6 +74,7 @@
 #include <Eigen/Core>
 
 #include "model/fleet_model.hpp"
+#include "model/model_extension.hpp"
 #include "records/wim_record.hpp"
 #include "site/site.hpp"
 
@@ -138,6 +158,32 @@ struct BatchMcmcOptions {
   // draws do not depend on it.
   int threads = 0;
 
+  // An optional model extension (model_extension.hpp; step 5 of the header): its parameters ψ join
+  // the chain. Not owned; must outlive the call. nullptr = the base model.
+  const ModelExtension* extension = nullptr;
+  // Where ψ starts (inside its box, one value per parameter). Default: the best, by the log
+  // posterior at the chain's starting θ and latents, of the parameters' null values (the base
+  // model) and `psi_start_candidates` points of a Halton sequence over ψ's box (no random number
+  // drawn; batch_mcmc_extension.hpp says why). Each candidate costs N passes when ψ edits the
+  // forward model; when it only replaces the stiffness distribution, 64 times as many candidates
+  // over (K, sigma_k, ψ) cost N densities each, and the start of (K, sigma_k) follows the best.
+  // 0 candidates: the null values.
+  std::optional<std::vector<double>> initial_psi;
+  int psi_start_candidates = 1024;
+  // Random-walk MH steps of ψ per sweep. With an extension that edits the forward model each is one
+  // batched call of N passes, as much as the latent step, so one.
+  int psi_moves_per_sweep = 1;
+  // The extension's own jump (if it has one) on sweeps with it % psi_jump_every == 0 (0 = never).
+  // N passes each; the jump exists for modes the random walk cannot cross (profile_defect's bump
+  // and dip a wheel-hop wavelength apart), so it must keep coming after the chain has settled.
+  int psi_jump_every = 1;
+  // First proposal sd of each ψ coordinate as a fraction of its prior width, before the chain's
+  // own covariance takes over in burn-in.
+  double psi_initial_step = 0.01;
+  // (K, sigma_k[, ψ]) random-walk MH steps per sweep with an extension's stiffness distribution
+  // (O(N) each, no integrator call, as the (Z, sigma_z) steps).
+  int stiffness_moves_per_sweep = 10;
+
   // False, with a message naming the option and the rule, if an option is out of range.
   bool IsValid(std::string* error) const;
 };
@@ -148,6 +194,9 @@ struct BatchMcmcResult {
   Eigen::MatrixXd theta_draws;
   // log of the unnormalised posterior density at each kept draw (a convergence trace).
   Eigen::VectorXd log_target;
+  // With an extension: its parameters ψ at the same kept draws (rows), in parameters() order;
+  // 0 columns without one.
+  Eigen::MatrixXd psi_draws;
 
   // Per truck (rows, the records' order) posterior mean and sd of (k, kt, z), over every sweep
   // after burn-in (not thinned).
@@ -169,6 +218,13 @@ struct BatchMcmcResult {
   // 0 where the block was not interwoven.
   double ancillary_k_acceptance = 0.0, ancillary_kt_acceptance = 0.0, ancillary_z_acceptance = 0.0;
   double lateral_jump_acceptance = 0.0;  // after burn-in, over trucks and jump sweeps
+  // With an extension, after burn-in: ψ's random walk (or, when ψ moves with (K, sigma_k) in the
+  // stiffness steps, those steps' acceptance), its jump (0 without one), and the (K, sigma_k[, ψ])
+  // steps of an extension's stiffness distribution (also reported as sigma_k_acceptance).
+  double psi_acceptance = 0.0;
+  double psi_jump_acceptance = 0.0;
+  double stiffness_acceptance = 0.0;
+  std::vector<double> initial_psi;  // where ψ started (empty without an extension)
   int threads = 1;  // threads the integrator calls were split over
   // Final per-truck proposal scale multipliers (frozen after burn-in).
   Eigen::VectorXd latent_proposal_scale;
@@ -192,5 +248,12 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
 double log_posterior_unnormalised(const HyperVector& theta, const Eigen::Ref<const Eigen::MatrixXd>& latents,
                                   const Eigen::Ref<const Eigen::VectorXd>& ssr, int sensors,
                                   const PriorBounds& prior, const LateralRange& range);
+// The same with a model extension at ψ (the residuals computed at ψ): the extension's stiffness
+// density for every k if it has one, and ψ's uniform prior added last. A null extension gives the
+// base model's value; an extension at its null ψ gives that value plus ψ's log prior, bit for bit.
+double log_posterior_unnormalised(const HyperVector& theta, const Eigen::Ref<const Eigen::MatrixXd>& latents,
+                                  const Eigen::Ref<const Eigen::VectorXd>& ssr, int sensors,
+                                  const PriorBounds& prior, const LateralRange& range,
+                                  const ModelExtension* extension, const double* psi);
 
 }  // namespace ssrfleet::fleet

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "model/extended_forward.hpp"
 #include "util/errors.hpp"
 #include "vehicle/pass_integrator.hpp"
 
@@ -34,8 +35,11 @@ Observations gather(const site::Site& site, const std::vector<records::WimRecord
   return obs;
 }
 
-void ResidualEvaluator::evaluate(const std::vector<int>& which, const Eigen::ArrayXd& k,
-                                 const Eigen::ArrayXd& kt, const Eigen::ArrayXd& z, Eigen::ArrayXd& ssr_out) {
+void ResidualEvaluator::evaluate(const std::vector<int>& which, const Eigen::ArrayXd& k, const Eigen::ArrayXd& kt,
+                                 const Eigen::ArrayXd& z, const double* psi, Eigen::ArrayXd& ssr_out) {
+  if (extension_ != nullptr && psi == nullptr) {
+    throw UsageError("batch MCMC: the residuals of an extended model need its parameters (psi is null)");
+  }
   constexpr Eigen::Index kBlock = vehicle::batch_block_trucks;
   constexpr Eigen::Index kChunk = 2048;  // a multiple of kBlock: bounds the work arrays
   static_assert(kChunk % kBlock == 0);
@@ -45,20 +49,33 @@ void ResidualEvaluator::evaluate(const std::vector<int>& which, const Eigen::Arr
   parallel_(blocks, [&](Eigen::Index block_begin, Eigen::Index block_end) {
     const Eigen::Index begin = block_begin * kBlock, end = std::min(total, block_end * kBlock);
     site::TruckBatch batch;
+    std::vector<ExtendedPass> passes;
     Eigen::ArrayXXd model_if;
     for (Eigen::Index first = begin; first < end; first += kChunk) {
       const Eigen::Index count = std::min(kChunk, end - first);
-      batch.resize(count);
-      for (Eigen::Index i = 0; i < count; ++i) {
-        const int n = which[static_cast<std::size_t>(first + i)];
-        batch.speed_mps[i] = obs_.speed_mps[n];
-        batch.sprung_mass_kg[i] = obs_.sprung_mass_kg[n];
-        batch.stiffness_npm[i] = k[first + i];
-        batch.tyre_stiffness_npm[i] = kt[first + i];
-        batch.lateral_m[i] = z[first + i];
-      }
       model_if.resize(obs_.sensors, count);
-      site_.impact_factors(batch, model_if);
+      if (extension_ != nullptr) {
+        // Every pass shares one ψ, so the extended forward model builds an added profile once.
+        passes.clear();
+        for (Eigen::Index i = 0; i < count; ++i) {
+          const int n = which[static_cast<std::size_t>(first + i)];
+          passes.push_back({base_pass(site_, obs_.speed_mps[n], obs_.sprung_mass_kg[n], k[first + i], kt[first + i],
+                                      z[first + i]),
+                            psi});
+        }
+        simulate_passes(site_, extension_, passes, model_if);
+      } else {
+        batch.resize(count);
+        for (Eigen::Index i = 0; i < count; ++i) {
+          const int n = which[static_cast<std::size_t>(first + i)];
+          batch.speed_mps[i] = obs_.speed_mps[n];
+          batch.sprung_mass_kg[i] = obs_.sprung_mass_kg[n];
+          batch.stiffness_npm[i] = k[first + i];
+          batch.tyre_stiffness_npm[i] = kt[first + i];
+          batch.lateral_m[i] = z[first + i];
+        }
+        site_.impact_factors(batch, model_if);
+      }
       for (Eigen::Index i = 0; i < count; ++i) {
         const int n = which[static_cast<std::size_t>(first + i)];
         const double s = (model_if.col(i) - obs_.impact_factor.col(n)).square().sum();

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "model/extended_forward.hpp"
+#include "model/extension_conditionals.hpp"
 #include "model/fleet_conditionals.hpp"
 #include "model/truncated_samplers.hpp"
 #include "smc/mh_kernel.hpp"
@@ -154,9 +155,7 @@ void FleetTarget::recompute_sums(Eigen::Index i) {
   for (int c = 0; c < kSumCount; ++c) sums_(c, i) = s[c];
 }
 
-bool FleetTarget::stiffness_edited() const {
-  return options_.extension != nullptr && options_.extension->edits_stiffness_distribution();
-}
+bool FleetTarget::stiffness_edited() const { return edits_stiffness(options_.extension); }
 
 double FleetTarget::draw_stiffness(smc::Rng& rng, const HyperVector& t, const double* psi) const {
   if (!stiffness_edited()) return t[kK] + t[kSigmaK] * standard_normal(rng);
@@ -165,20 +164,12 @@ double FleetTarget::draw_stiffness(smc::Rng& rng, const HyperVector& t, const do
 }
 
 double FleetTarget::latent_log_density(const double* x, const HyperVector& t, const double* psi) const {
-  if (!stiffness_edited()) return log_latent_density(x[kStiffness], x[kTyreStiffness], x[kLateral], t, lateral_);
-  // The base density with the k factor swapped for the extension's.
-  return log_latent_density(x[kStiffness], x[kTyreStiffness], x[kLateral], t, lateral_) -
-         log_normal_density(x[kStiffness], t[kK], t[kSigmaK]) +
-         options_.extension->log_stiffness_density(psi, x[kStiffness], t[kK], t[kSigmaK]);
+  return log_latent_density(options_.extension, psi, x[kStiffness], x[kTyreStiffness], x[kLateral], t, lateral_);
 }
 
 double FleetTarget::stiffness_log_density(Eigen::Index i, double mean, double sd, const double* psi,
                                           Eigen::Index trucks) const {
-  double lp = 0.0;
-  for (Eigen::Index j = 0; j < trucks; ++j) {
-    lp += options_.extension->log_stiffness_density(psi, latents_(3 * j + kStiffness, i), mean, sd);
-  }
-  return lp;
+  return log_stiffness_sum(*options_.extension, psi, latents_.col(i).data() + kStiffness, trucks, 3, mean, sd);
 }
 
 double FleetTarget::base_density(Eigen::Index i, const HyperVector& t, const double* newest) const {

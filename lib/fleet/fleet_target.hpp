@@ -17,6 +17,8 @@
 //   log p(θ) + Σ_{i≤n} [log p(x_i | θ) + log p(y_i | x_i, σ_IF)] + log p(x_{n+1} | θ)
 // computed in O(1) per particle from running sums (Σk, Σk², Σk_t, Σk_t², Σz, Σz², ΣSSR), or, with
 // an extension's stiffness distribution (which has no sufficient statistic), in O(n) for the k part.
+// The densities come from model/fleet_conditionals.hpp and, for what an extension changes,
+// model/extension_conditionals.hpp: the batch MCMC calls the same ones.
 #pragma once
 
 #include <cstdint>

@@ -12,6 +12,7 @@
 #include <Eigen/Cholesky>
 
 #include "model/extended_forward.hpp"
+#include "model/extension_conditionals.hpp"
 #include "model/fleet_conditionals.hpp"
 #include "model/truncated_samplers.hpp"
 #include "smc/mh_kernel.hpp"
@@ -287,13 +288,10 @@ void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::Parall
     // (the newest included, at φ = 1).
     const double s_new = new_ssr.col(i).sum(), s_old = ssr_.col(i).sum();
     if (!std::isfinite(s_new)) continue;
-    const double sigma = theta_(kSigmaIf, i);
-    double log_ratio = (s_old - s_new) / (2.0 * sigma * sigma);
-    if (stiffness_edited()) {  // ψ also changes the fleet density of every kept truck's k
-      const double mean = theta_(kK, i), sd = theta_(kSigmaK, i);
-      log_ratio += stiffness_log_density(i, mean, sd, proposals.col(i).data(), n) -
-                   stiffness_log_density(i, mean, sd, psi_.col(i).data(), n);
-    }
+    // With an extension's stiffness distribution ψ also changes the density of every kept truck's k.
+    const double log_ratio =
+        log_psi_ratio(ext, proposals.col(i).data(), psi_.col(i).data(), s_new, s_old, theta_(kSigmaIf, i),
+                      latents_.col(i).data() + kStiffness, n, 3, theta_(kK, i), theta_(kSigmaK, i));
     if (log_u[i] < log_ratio) {
       psi_.col(i) = proposals.col(i);
       ssr_.col(i) = new_ssr.col(i);
@@ -325,10 +323,8 @@ void FleetTarget::stiffness_distribution_sweep(const smc::RngFactory& rngs, cons
   // log p(K, σ_k, ψ | every kept truck's k) up to a constant: the uniform boxes and the trucks'
   // stiffness densities (the newest truck's in full: its latents are in γ at every φ).
   const auto log_density = [&](Eigen::Index i, const Eigen::VectorXd& x) {
-    if (!(x[0] >= prior.lo[kK] && x[0] <= prior.hi[kK] && x[1] >= prior.lo[kSigmaK] && x[1] <= prior.hi[kSigmaK])) return -kInf;
     const double* psi = with_psi ? x.data() + 2 : psi_.col(i).data();
-    if (with_psi && !ext.in_prior(psi)) return -kInf;
-    return stiffness_log_density(i, x[0], x[1], psi, n);
+    return log_stiffness_conditional(ext, x[0], x[1], psi, latents_.col(i).data() + kStiffness, n, 3, prior);
   };
   std::vector<int> moved(static_cast<std::size_t>(P), 0);
   parallel(P, [&](Eigen::Index begin, Eigen::Index end) {

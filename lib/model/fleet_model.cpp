@@ -37,9 +37,14 @@ double log_normal_mass(double lo, double hi, double mean, double sd) {
 
 double log_latent_density(double stiffness_npm, double tyre_stiffness_npm, double lateral_m,
                           const HyperVector& theta, const LateralRange& range) {
+  return log_latent_density_with_stiffness_term(log_normal_density(stiffness_npm, theta[kK], theta[kSigmaK]),
+                                                tyre_stiffness_npm, lateral_m, theta, range);
+}
+
+double log_latent_density_with_stiffness_term(double log_stiffness_density, double tyre_stiffness_npm,
+                                              double lateral_m, const HyperVector& theta, const LateralRange& range) {
   if (lateral_m < range.lo_m || lateral_m > range.hi_m) return -std::numeric_limits<double>::infinity();
-  return log_normal_density(stiffness_npm, theta[kK], theta[kSigmaK]) +
-         log_normal_density(tyre_stiffness_npm, theta[kKt], theta[kSigmaKt]) +
+  return log_stiffness_density + log_normal_density(tyre_stiffness_npm, theta[kKt], theta[kSigmaKt]) +
          log_normal_density(lateral_m, theta[kZ], theta[kSigmaZ]) -
          log_normal_mass(range.lo_m, range.hi_m, theta[kZ], theta[kSigmaZ]);
 }

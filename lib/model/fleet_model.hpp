@@ -55,6 +55,11 @@ double log_normal_mass(double lo, double hi, double mean, double sd);
 // log p(k, kt, z | theta) for one truck (z truncated to the lateral range).
 double log_latent_density(double stiffness_npm, double tyre_stiffness_npm, double lateral_m,
                           const HyperVector& theta, const LateralRange& range);
+// The same with the k factor given as its log density (log N(k | K, sigma_k^2) in the base model, a
+// model extension's stiffness density otherwise: extension_conditionals.hpp). The terms are summed
+// in the base model's order, so the base density's factor gives the base density's bits.
+double log_latent_density_with_stiffness_term(double log_stiffness_density, double tyre_stiffness_npm,
+                                              double lateral_m, const HyperVector& theta, const LateralRange& range);
 
 // log prod_m N(y_m; IF_m, sigma^2) from the sum of squared residuals over M sensors.
 inline double log_likelihood_from_ssr(double sum_squared_residuals, int sensors, double sigma_if) {

@@ -1,0 +1,397 @@
+// The batch MCMC with a model extension (batch_mcmc.hpp step 5): ψ joins the chain through the
+// same densities and forward model as the latent SMC core, and the two agree on every extension of
+// the catalogue.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+
+#include "fleet/batch_mcmc.hpp"
+#include "fleet/batch_mcmc_residuals.hpp"
+#include "fleet/fleet_smc.hpp"
+#include "fleet/simulator.hpp"
+#include "model/fleet_distribution.hpp"
+#include "model/model_extension.hpp"
+#include "site/road_source.hpp"
+#include "site/site.hpp"
+#include "util/effective_sample_size.hpp"
+
+using namespace ssrfleet;
+
+namespace {
+
+const site::Site& as1() {
+  static const site::Site site(site::load_road("AS1"), site::SiteOptions{});
+  return site;
+}
+
+// Each extension switched on at a realistic size (the magnitudes of diagnose_test's long cases).
+const std::map<std::string, std::string>& hidden_effects() {
+  static const std::map<std::string, std::string> settings = {
+      {"profile_defect", "profile_defect:position=84.3,length=0.5,height=0.01"},
+      {"second_class", "second_class:share=0.3,K2=1000000,sigma_k2=100000"},
+      {"sensor_gain", "sensor_gain:sensor=5,gain=1.05"},
+      {"speed_bias", "speed_bias:factor=1.05"},
+      {"suspension_damping", "suspension_damping:c_b=35000"},
+      {"tyre_damping", "tyre_damping:c_t=2000"},
+      {"unsprung_mass", "unsprung_mass:m1=600"},
+  };
+  return settings;
+}
+
+struct HiddenEffectLog {
+  std::vector<records::Truck> trucks;  // as they drove (second_class edits k)
+  std::vector<records::WimRecord> records;
+};
+
+// Table 1 fleet on AS1, sigma_IF = 0.02, with the named extension's effect in the data.
+HiddenEffectLog hidden_effect_log(const std::string& name, int trucks, std::uint64_t seed) {
+  const auto& site = as1();
+  const auto fleet = fleet::draw_fleet(fleet::FleetDistribution{}, trucks, site.lateral_min_m(), site.lateral_max_m(), seed);
+  const auto effect = fleet::parse_extension_setting(hidden_effects().at(name), site);
+  const auto log = fleet::simulate_log(site, fleet, 0.02, seed, *effect.extension, effect.psi);
+  return {log.trucks, log.records};
+}
+
+Eigen::MatrixXd latents_of(const std::vector<records::Truck>& trucks) {
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(trucks.size()), 3);
+  for (std::size_t i = 0; i < trucks.size(); ++i) {
+    x.row(static_cast<Eigen::Index>(i)) << trucks[i].stiffness_npm, trucks[i].tyre_stiffness_npm, trucks[i].lateral_m;
+  }
+  return x;
+}
+
+std::vector<double> null_psi(const fleet::ModelExtension& ext) {
+  std::vector<double> psi;
+  for (const auto& p : ext.parameters()) psi.push_back(p.null_value);
+  return psi;
+}
+
+}  // namespace
+
+TEST_CASE("the catalogue of the extension tests is the registered catalogue", "[fleet][mcmc][extension]") {
+  // The agreement test below runs every registered extension; a new one needs a hidden effect here.
+  for (const auto& name : fleet::extension_names()) {
+    INFO(name);
+    CHECK(hidden_effects().count(name) == 1);
+  }
+}
+
+TEST_CASE("an extension at its null psi reproduces the base model's log density exactly", "[fleet][mcmc][extension]") {
+  const auto& site = as1();
+  const auto data = hidden_effect_log("tyre_damping", 12, 3);
+  const Eigen::MatrixXd x = latents_of(data.trucks);
+  const fleet::detail::Observations obs = fleet::detail::gather(site, data.records);
+  std::vector<int> all(x.rows());
+  for (int n = 0; n < static_cast<int>(x.rows()); ++n) all[static_cast<std::size_t>(n)] = n;
+  const fleet::LateralRange range{site.lateral_min_m(), site.lateral_max_m()};
+  const fleet::PriorBounds prior;
+  const fleet::HyperVector theta{480e3, 60e3, 1.9e6, 210e3, 1.4, 0.55, 0.021};
+
+  Eigen::ArrayXd base_ssr;
+  fleet::detail::ResidualEvaluator base(site, obs, 2);
+  base.evaluate(all, x.col(0).array(), x.col(1).array(), x.col(2).array(), nullptr, base_ssr);
+  const double base_density = fleet::log_posterior_unnormalised(theta, x, base_ssr.matrix(), site.sensors(), prior, range);
+  REQUIRE(std::isfinite(base_density));
+
+  for (const auto& name : fleet::extension_names()) {
+    INFO(name);
+    const auto ext = fleet::make_extension(name, site);
+    const std::vector<double> psi = null_psi(*ext);
+    fleet::detail::ResidualEvaluator extended(site, obs, 2, ext.get());
+    Eigen::ArrayXd ssr;
+    extended.evaluate(all, x.col(0).array(), x.col(1).array(), x.col(2).array(), psi.data(), ssr);
+    // The same forward model, bit for bit, and the same density up to ψ's prior, bit for bit.
+    CHECK((ssr == base_ssr).all());
+    const double density =
+        fleet::log_posterior_unnormalised(theta, x, ssr.matrix(), site.sensors(), prior, range, ext.get(), psi.data());
+    CHECK(density == base_density + ext->log_prior(psi.data()));
+    // Not vacuous: the hidden effect's own ψ gives another density.
+    const auto effect = fleet::parse_extension_setting(hidden_effects().at(name), site);
+    extended.evaluate(all, x.col(0).array(), x.col(1).array(), x.col(2).array(), effect.psi.data(), ssr);
+    CHECK(fleet::log_posterior_unnormalised(theta, x, ssr.matrix(), site.sensors(), prior, range, ext.get(),
+                                            effect.psi.data()) != density);
+  }
+}
+
+TEST_CASE("bad extension options of the batch MCMC are refused naming the option", "[fleet][mcmc][extension]") {
+  const auto gain = fleet::make_extension("sensor_gain", as1());
+  const auto second = fleet::make_extension("second_class", as1());
+  struct Case {
+    std::function<void(fleet::BatchMcmcOptions&)> change;
+    const char* name;
+  };
+  const Case cases[] = {
+      {[&](auto& o) { o.psi_moves_per_sweep = 0; }, "psi_moves_per_sweep"},
+      {[&](auto& o) { o.psi_jump_every = -1; }, "psi_jump_every"},
+      {[&](auto& o) { o.psi_initial_step = 0.0; }, "psi_initial_step"},
+      {[&](auto& o) { o.psi_initial_step = 2.0; }, "psi_initial_step"},
+      {[&](auto& o) { o.stiffness_moves_per_sweep = 0; }, "stiffness_moves_per_sweep"},
+      {[&](auto& o) { o.initial_psi = std::vector<double>{5.0, 1.05}; }, "initial_psi"},  // no extension
+      {[&](auto& o) {
+         o.extension = gain.get();
+         o.initial_psi = std::vector<double>{5.0};
+       },
+       "initial_psi size"},
+      {[&](auto& o) {
+         o.extension = gain.get();
+         o.initial_psi = std::vector<double>{5.0, 1.5};  // gain's box is [0.8, 1.2]
+       },
+       "initial_psi"},
+      {[&](auto& o) {
+         o.extension = second.get();
+         o.interweave_stiffness = true;
+       },
+       "interweave_stiffness"},
+  };
+  for (const Case& c : cases) {
+    fleet::BatchMcmcOptions o;
+    c.change(o);
+    std::string message;
+    INFO("option " << c.name);
+    CHECK_FALSE(o.IsValid(&message));
+    CHECK_THAT(message, Catch::Contains(c.name));
+    CHECK_THROWS_WITH(fleet::run_batch_mcmc(as1(), hidden_effect_log("sensor_gain", 2, 1).records, o),
+                      Catch::Contains(c.name));
+  }
+  // The same options are fine where they fit.
+  fleet::BatchMcmcOptions o;
+  o.extension = gain.get();
+  o.initial_psi = std::vector<double>{5.0, 1.05};
+  std::string message;
+  CHECK(o.IsValid(&message));
+  o.extension = second.get();
+  o.initial_psi.reset();
+  o.interweave_stiffness = true;
+  o.interweave = false;  // no ancillary step at all: nothing to refuse
+  CHECK(o.IsValid(&message));
+}
+
+TEST_CASE("with every extension the batch MCMC moves psi and keeps it in its prior box", "[fleet][mcmc][extension]") {
+  for (const auto& name : fleet::extension_names()) {
+    INFO(name);
+    const auto data = hidden_effect_log(name, 20, 41);
+    const auto ext = fleet::make_extension(name, as1());
+    fleet::BatchMcmcOptions o;
+    o.iterations = 300;
+    o.burn_in = 150;
+    o.hold_theta_sweeps = 20;
+    o.seed = 3;
+    o.threads = 2;
+    o.extension = ext.get();
+    o.initial_latents = latents_of(data.trucks);  // skips the best-fit search: this test is about ψ
+    const auto r = fleet::run_batch_mcmc(as1(), data.records, o);
+    REQUIRE(r.psi_draws.rows() == r.theta_draws.rows());
+    REQUIRE(r.psi_draws.cols() == ext->dim());
+    for (std::size_t j = 0; j < r.initial_psi.size(); ++j) {
+      CHECK(r.initial_psi[j] >= ext->parameters()[j].lo);
+      CHECK(r.initial_psi[j] <= ext->parameters()[j].hi);
+    }
+    int moves = 0;
+    for (Eigen::Index i = 0; i < r.psi_draws.rows(); ++i) {
+      const Eigen::VectorXd psi = r.psi_draws.row(i).transpose();
+      CHECK(ext->in_prior(psi.data()));
+      if (i > 0 && r.psi_draws.row(i) != r.psi_draws.row(i - 1)) ++moves;
+    }
+    INFO("psi acceptance " << r.psi_acceptance << ", jump acceptance " << r.psi_jump_acceptance << ", " << moves
+                           << " moves in " << r.psi_draws.rows() << " kept sweeps");
+    CHECK(moves > 0);
+    CHECK(r.psi_acceptance > 0.0);
+    CHECK(r.log_target.allFinite());
+    if (ext->edits_stiffness_distribution()) {
+      // (K, σ_k) move by MH, not Gibbs: their acceptance is a rate, not 1.
+      CHECK(r.stiffness_acceptance > 0.0);
+      CHECK(r.stiffness_acceptance < 1.0);
+      CHECK(r.sigma_k_acceptance == r.stiffness_acceptance);
+    }
+  }
+}
+
+TEST_CASE("the batch MCMC without an extension draws no psi", "[fleet][mcmc][extension]") {
+  const auto data = hidden_effect_log("sensor_gain", 5, 7);
+  fleet::BatchMcmcOptions o;
+  o.iterations = 40;
+  o.burn_in = 20;
+  o.hold_theta_sweeps = 5;
+  o.threads = 1;
+  o.initial_latents = latents_of(data.trucks);
+  const auto r = fleet::run_batch_mcmc(as1(), data.records, o);
+  CHECK(r.psi_draws.cols() == 0);
+  CHECK(r.psi_draws.rows() == r.theta_draws.rows());
+  CHECK(r.initial_psi.empty());
+}
+
+TEST_CASE("with every extension the SMC target's density equals the batch MCMC's log posterior up to one constant",
+          "[fleet][mcmc][smc][extension]") {
+  // Both samplers target one posterior: after the last stage (φ = 1) each particle's log γ + ℓ is the
+  // full log posterior of its state (θ, ψ, latents), which the batch MCMC's log posterior must
+  // reproduce up to a constant (ψ's uniform prior, which the SMC leaves out) for every particle.
+  const auto& site = as1();
+  const fleet::LateralRange range{site.lateral_min_m(), site.lateral_max_m()};
+  for (const auto& name : fleet::extension_names()) {
+    INFO(name);
+    const auto data = hidden_effect_log(name, 6, 11);
+    const auto ext = fleet::make_extension(name, site);
+    fleet::FleetSmc::Options o;
+    o.sampler.particles = 64;
+    o.sampler.threads = 1;
+    o.sampler.seed = 3;
+    o.extension = ext.get();
+    fleet::FleetSmc smc(site, o);
+    for (const auto& r : data.records) smc.absorb(r);
+    auto& target = const_cast<fleet::FleetTarget&>(smc.target());
+    const Eigen::Index P = target.particles(), n = target.kept_trucks();
+    Eigen::ArrayXd log_base(P), loglik(P);
+    target.log_density(log_base, loglik, smc::ParallelFor(1));
+    std::vector<double> offsets;
+    for (Eigen::Index i = 0; i < P; ++i) {
+      fleet::HyperVector theta;
+      for (int h = 0; h < fleet::kHyperCount; ++h) theta[h] = target.theta()(h, i);
+      Eigen::MatrixXd latents(n, 3);
+      for (Eigen::Index j = 0; j < n; ++j) latents.row(j) = target.truck_latents(j).col(i).transpose();
+      const Eigen::VectorXd ssr = target.sums_of_squared_residuals().col(i);
+      const Eigen::VectorXd psi = target.psi().col(i);
+      offsets.push_back(log_base[i] + loglik[i] -
+                        fleet::log_posterior_unnormalised(theta, latents, ssr, site.sensors(), fleet::PriorBounds{}, range,
+                                                          ext.get(), psi.data()));
+    }
+    // Rounding is judged against the size of the density (the SMC sums it in another order).
+    const double scale = std::abs(log_base[0] + loglik[0]);
+    for (double offset : offsets) CHECK(offset == Approx(offsets.front()).margin(1e-7 * scale));
+  }
+}
+
+namespace {
+
+struct Moments {
+  double mean = 0.0, sd = 0.0;
+};
+
+Moments weighted_moments(const Eigen::VectorXd& x, const Eigen::ArrayXd& w) {
+  const double total = w.sum();
+  const double mean = (x.array() * w).sum() / total;
+  return {mean, std::sqrt(((x.array() - mean).square() * w).sum() / total)};
+}
+
+}  // namespace
+
+// Issue 15: one fleet model for every algorithm. For every registered extension, on one simulated
+// log with that extension's effect hidden in it, the latent SMC core and the batch MCMC, each fitting
+// the extension, must give the same posterior means of the 7 hyperparameters and of every ψ
+// component, within 0.25 posterior sd.
+//
+// Tolerance. The offset of two Monte Carlo estimates of one mean has, in posterior-sd units, the
+// sd sqrt(1/ESS_mcmc + se_smc^2) when both target the same posterior:
+//  - the MCMC's: 1/sqrt(ESS) from the chain's own ESS (Geyer, util/effective_sample_size.hpp);
+//  - the SMC's: measured, not assumed: two SMC runs with different seeds, whose difference has
+//    variance 2 se^2 for one run, so the mean of the two has se_smc = |m1 - m2| / 2. One pair is a
+//    one-degree-of-freedom estimate per parameter, so it is pooled (root mean square) over the
+//    extension's parameters.
+// The test first requires that combined Monte Carlo sd to be at most 0.25 / 3 for every parameter
+// (otherwise a 0.25 sd threshold could not tell a real disagreement from noise, and the test says
+// so rather than passing), then the offset to be under 0.25 sd: at least 3 Monte Carlo sd, so a
+// failure flags a difference between the samplers' posteriors, not their noise.
+//
+// Measured (commit of this comment, 2 cores shared, 730 s in all; 50 trucks, 1024 particles and
+// 50 final sweeps per SMC run, 30,000 MCMC sweeps of which 25,000 kept; largest |offset| over the
+// 7 + d parameters, and the Monte Carlo sd it is judged against):
+//   sensor_gain 0.05 sd, suspension_damping 0.11, tyre_damping 0.06, unsprung_mass 0.05: pass
+//   (MCMC ESS >= 200, SMC se <= 0.03 sd);
+//   speed_bias 0.29 (sigma_kt) and <= 0.07 elsewhere: the SMC's own error is too large for the
+//   check (its two seeds differ by 0.41 sd on sigma_kt, pooled se 0.094 sd > 0.083);
+//   profile_defect <= 0.15 sd, but both samplers are far from precise along the defect's
+//   length-height ridge (MCMC ESS 7 on height, 10 on length; the SMC's seeds differ by 1.07 sd on
+//   height): fails the Monte Carlo check;
+//   second_class: a real disagreement, sigma_IF 4.2 sd, K 1.8 sd, sigma_kt 1.1 sd: in the MCMC one
+//   stiff truck (k 1.23e6 N/m in the data) stays in another joint (k, k_t, z) mode, k 3.8e5 at
+//   z 2.11 m instead of 0.95 m, which the random walk and the lateral jumps (z alone) cannot leave;
+//   its best-fit start (model/truck_fit) already put it there (k 3.6e5, k_t 3.1e6, z 2.10), while
+//   both SMC runs put all their weight on k 1.20e6, k_t 2.2e6, z 0.98 (sigma_IF 0.01964 against the
+//   MCMC's 0.02229). The SMC's two seeds also differ by 3.0 sd on K, so its own error is too large
+//   here as well.
+TEST_CASE("the latent SMC and the batch MCMC agree on every extension's posterior within a quarter sd",
+          "[fleet][mcmc][smc][extension][long]") {
+  constexpr int kTrucks = 50;
+  constexpr Eigen::Index kParticles = 1024;
+  constexpr int kMcmcIterations = 30000, kMcmcBurnIn = 5000;
+  constexpr double kTolerance = 0.25;  // posterior sd
+  const auto& site = as1();
+  const auto started = std::chrono::steady_clock::now();
+  for (const auto& name : fleet::extension_names()) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto data = hidden_effect_log(name, kTrucks, 2024);
+    const auto ext = fleet::make_extension(name, site);
+    const Eigen::Index d = ext->dim();
+
+    // The SMC, twice (seeds 1, 2): θ and ψ per particle, with the cloud's weights.
+    std::vector<Eigen::MatrixXd> smc_states;  // (7 + d) x P
+    std::vector<Eigen::ArrayXd> smc_weights;
+    for (std::uint64_t seed : {1, 2}) {
+      fleet::FleetSmc::Options o;  // the latent core's defaults (`fit --core latent`, diagnose)
+      o.sampler.particles = kParticles;
+      o.sampler.threads = 2;
+      o.sampler.seed = seed;
+      o.extension = ext.get();
+      fleet::FleetSmc smc(site, o);
+      for (const auto& r : data.records) smc.absorb(r);
+      smc.rejuvenate(o.sampler.schedule.final_sweeps);
+      const auto cloud = smc.cloud();
+      Eigen::MatrixXd state(fleet::kHyperCount + d, kParticles);
+      state.topRows(fleet::kHyperCount) = cloud.theta;
+      state.bottomRows(d) = smc.target().psi();
+      smc_states.push_back(state);
+      smc_weights.push_back(cloud.weights);
+    }
+    const double smc_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+    fleet::BatchMcmcOptions o;
+    o.iterations = kMcmcIterations;
+    o.burn_in = kMcmcBurnIn;
+    o.seed = 7;
+    o.threads = 2;
+    o.extension = ext.get();
+    const auto r = fleet::run_batch_mcmc(site, data.records, o);
+    Eigen::MatrixXd chain(r.theta_draws.rows(), fleet::kHyperCount + d);
+    chain << r.theta_draws, r.psi_draws;
+
+    std::vector<std::string> names(fleet::kHyperNames.begin(), fleet::kHyperNames.end());
+    for (const auto& p : ext->parameters()) names.push_back(name + "." + p.name);
+    const Eigen::Index J = fleet::kHyperCount + d;
+    std::vector<double> offset(J), mcmc_se(J), smc_diff(J), ess(J);
+    double pooled = 0.0;
+    for (Eigen::Index j = 0; j < J; ++j) {
+      const Eigen::VectorXd c = chain.col(j);
+      const double mean = c.mean(), sd = std::sqrt((c.array() - mean).square().mean());
+      const Moments a = weighted_moments(smc_states[0].row(j).transpose(), smc_weights[0]);
+      const Moments b = weighted_moments(smc_states[1].row(j).transpose(), smc_weights[1]);
+      ess[j] = chain_effective_sample_size(c);
+      mcmc_se[j] = 1.0 / std::sqrt(ess[j]);
+      smc_diff[j] = (a.mean - b.mean) / sd;
+      pooled += smc_diff[j] * smc_diff[j];
+      offset[j] = (0.5 * (a.mean + b.mean) - mean) / sd;
+    }
+    const double smc_se = std::sqrt(pooled / static_cast<double>(J)) / 2.0;
+    const double mcmc_seconds = r.wall_seconds;
+    std::ostringstream report;
+    report << name << ": SMC " << smc_seconds << " s (2 runs), MCMC " << mcmc_seconds << " s, psi acceptance "
+           << r.psi_acceptance << ", jump " << r.psi_jump_acceptance << ", SMC se " << smc_se << " sd\n";
+    for (Eigen::Index j = 0; j < J; ++j) {
+      report << "  " << names[static_cast<std::size_t>(j)] << ": offset " << offset[j] << " sd, MCMC ESS " << ess[j]
+             << ", SMC seed difference " << smc_diff[j] << " sd\n";
+    }
+    WARN(report.str());  // the measured offsets and times, for the record
+    for (Eigen::Index j = 0; j < J; ++j) {
+      INFO(report.str() << names[static_cast<std::size_t>(j)]);
+      const double monte_carlo_sd = std::sqrt(mcmc_se[j] * mcmc_se[j] + smc_se * smc_se);
+      CHECK(monte_carlo_sd <= kTolerance / 3.0);
+      CHECK(std::abs(offset[j]) < kTolerance);
+    }
+  }
+  WARN("all extensions: " << std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() << " s");
+}
