@@ -1,0 +1,133 @@
+// MarginalTarget's checkpoint (marginal_target.hpp, "Checkpoint"): the particles and settings in
+// one fixed-size part, each truck's data, fit and table in an append-only part.
+#include "fleet/marginal_target.hpp"
+
+#include <string>
+
+#include "util/errors.hpp"
+
+namespace ssrfleet::fleet {
+
+namespace {
+constexpr std::uint64_t kMagic = 0x4e52414d46525353ULL;  // "SSRFMARN"
+constexpr std::uint32_t kVersion = 1;
+
+}  // namespace
+
+void MarginalTarget::save(BinaryWriter& out) const {
+  save_particles(out);
+  save_trucks(out, 0, static_cast<std::size_t>(trucks()));
+}
+
+void MarginalTarget::save_particles(BinaryWriter& out) const {
+  if (mode_ != Mode::kIdle) throw std::logic_error("MarginalTarget::save: mid-stage");
+  out.value(kMagic);
+  out.value(kVersion);
+  out.value(settings_.lattice);
+  out.value(settings_.sigma_ref);
+  out.value<std::uint8_t>(settings_.population ? 1 : 0);
+  if (settings_.population) out.value(*settings_.population);
+  out.value<std::uint8_t>(population_at_rebuild_ ? 1 : 0);
+  if (population_at_rebuild_) out.value(*population_at_rebuild_);
+  out.value<std::int64_t>(trucks_at_last_rebuild_);
+  out.value<std::int32_t>(rebuilds_);
+  out.value<std::int64_t>(passes_);
+  out.matrix(theta_);
+  out.matrix(base_sum_.matrix());
+  out.value<std::uint64_t>(speed_mps_.size());
+}
+
+void MarginalTarget::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const {
+  for (std::size_t i = begin; i < end; ++i) {
+    out.value(speed_mps_[i]);
+    out.value(sprung_mass_kg_[i]);
+    out.matrix(observed_if_[i]);
+    out.value(fits_[i]);
+    const model::TableView v = store_.view(i);
+    out.value<std::uint32_t>(static_cast<std::uint32_t>(v.nodes));
+    out.value(v.u_ref);
+    auto write = [&](const auto* p) {
+      for (std::size_t g = 0; g < v.nodes; ++g) out.value(p[g]);
+    };
+    write(v.k_index);
+    write(v.kt_index);
+    write(v.c);
+    write(v.m);
+    write(v.b);
+    write(v.z_mean_m);
+    write(v.z_var_m2);
+  }
+}
+
+std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
+  if (in.value<std::uint64_t>("marginal target") != kMagic) in.fail("marginal target", "not a marginal-core state");
+  const auto version = in.value<std::uint32_t>("marginal target version");
+  if (version != kVersion) {
+    in.fail("marginal target version", "format version " + std::to_string(version) + ", this build reads " +
+                                           std::to_string(kVersion));
+  }
+  settings_.lattice = in.value<model::Lattice>("lattice");
+  if (!settings_.lattice.valid() && settings_.lattice.dk_npm != 0.0) in.fail("lattice", "non-positive spacing");
+  settings_.sigma_ref = in.value<double>("sigma_ref");
+  settings_.population.reset();
+  if (in.value<std::uint8_t>("population")) settings_.population = in.value<model::TruckTableOptions::Population>("population");
+  population_at_rebuild_.reset();
+  if (in.value<std::uint8_t>("population at rebuild"))
+    population_at_rebuild_ = in.value<model::TruckTableOptions::Population>("population at rebuild");
+  trucks_at_last_rebuild_ = in.value<std::int64_t>("trucks at last rebuild");
+  rebuilds_ = in.value<std::int32_t>("rebuilds");
+  passes_ = in.value<std::int64_t>("passes");
+  theta_ = in.matrix("theta", kHyperCount, options_.particles);
+  base_sum_ = in.matrix("log-likelihood sums", options_.particles, 1).array();
+  inc_ = Eigen::ArrayXd::Zero(options_.particles);
+  const auto n = in.value<std::uint64_t>("trucks");
+  if (n > 100'000'000ULL) in.fail("trucks", "implausible truck count " + std::to_string(n));
+  speed_mps_.clear();
+  sprung_mass_kg_.clear();
+  observed_if_.clear();
+  fits_.clear();
+  sum_log_sd_k_ = sum_log_sd_kt_ = 0.0;
+  store_ = model::TableStore{};
+  store_.reserve(static_cast<std::size_t>(n), 0);
+  marginal_ = model::FleetMarginal(site_.sensors(), lateral_, settings_.lattice);
+  mode_ = Mode::kIdle;
+  old_store_.reset();
+  old_marginal_.reset();
+  return n;
+}
+
+void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
+  for (std::uint64_t i = 0; i < count; ++i) {
+    speed_mps_.push_back(in.value<double>("truck speed"));
+    sprung_mass_kg_.push_back(in.value<double>("truck mass"));
+    observed_if_.push_back(in.matrix("impact factors", site_.sensors(), 1));
+    fits_.push_back(in.value<model::TruckFit>("truck fit"));
+    add_to_width_sums(fits_.back());
+    model::TruckTable t;
+    const auto nodes = in.value<std::uint32_t>("table nodes");
+    if (nodes > 1'000'000) in.fail("table nodes", "implausible node count " + std::to_string(nodes));
+    t.u_ref = in.value<double>("table u_ref");
+    auto read = [&](auto& v, const char* what) {
+      v.resize(nodes);
+      for (auto& x : v) x = in.value<std::remove_reference_t<decltype(x)>>(what);
+    };
+    read(t.k_index, "table k index");
+    read(t.kt_index, "table kt index");
+    read(t.c, "table c");
+    read(t.m, "table m");
+    read(t.b, "table b");
+    read(t.z_mean_m, "table z mean");
+    read(t.z_var_m2, "table z var");
+    if (!(t.u_ref > 0.0) || !std::isfinite(speed_mps_.back()) || !std::isfinite(sprung_mass_kg_.back())) {
+      in.fail("truck", "a truck record holds impossible values");
+    }
+    store_.append(t);
+  }
+}
+
+void MarginalTarget::load(BinaryReader& in) {
+  const std::uint64_t n = load_particles(in);
+  load_trucks(in, n);
+}
+
+}  // namespace ssrfleet::fleet
