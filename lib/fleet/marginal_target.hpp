@@ -57,8 +57,9 @@ class MarginalTarget final : public smc::TemperedModel {
     // which flattens the posterior's lower tail. At the median (as before): on road AS2 (second
     // fleet, 1,000 trucks, σ_kt's posterior 173k ± 40k by the batch MCMC) the floor sat near 90k and
     // the SMC's σ_kt sd came out 24 % too wide (49.6k, 4 seeds). At the 2 % quantile the floor sits
-    // about 3 posterior sd below the mean. Cost on Table 1 (AS1, 1,000 trucks): 250 entries per
-    // table against 214 at the median (with too_fine = 0.8 below; 352 with 0.6).
+    // about 3 posterior sd below the mean. Cost on Table 1 (AS1, 1,000 trucks): 256 entries per
+    // table against 213 at the median, 6,900 integrator passes per truck against 4,600 (rebuilds
+    // included; with too_fine = 0.8 below; 363 entries with 0.6).
     double lattice_sd_quantile = 0.02;
     double lattice_sd_min_of_median = 0.5;
     // Which nodes a table keeps is judged against the posterior predictive of (k, k_t) with its sd
@@ -70,7 +71,7 @@ class MarginalTarget final : public smc::TemperedModel {
     // Rebuild when the ideal spacing has moved outside [spacing / too_coarse, spacing / too_fine].
     // A lattice too fine costs nodes, not accuracy; the spacing follows a low quantile of the fleet
     // sds, which rises as their posterior narrows, so at 0.6 the tables carried up to 2.8x the
-    // nodes they need (352 against 250 per table at 1,000 Table 1 trucks).
+    // nodes they need (363 against 256 per table at 1,000 Table 1 trucks).
     double too_coarse = 1.25, too_fine = 0.8;
     // Rebuilds at most at n >= rebuild_growth × (n at the last rebuild): O(1) cost per truck.
     double rebuild_growth = 1.5;
