@@ -12,6 +12,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "latent_particle.hpp"
+
 #include "fleet/batch_mcmc.hpp"
 #include "fleet/batch_mcmc_residuals.hpp"
 #include "fleet/fleet_smc.hpp"
@@ -251,10 +253,8 @@ TEST_CASE("with every extension the SMC target's density equals the batch MCMC's
     target.log_density(log_base, loglik, smc::ParallelFor(1));
     std::vector<double> offsets;
     for (Eigen::Index i = 0; i < P; ++i) {
-      fleet::HyperVector theta;
-      for (int h = 0; h < fleet::kHyperCount; ++h) theta[h] = target.theta()(h, i);
-      Eigen::MatrixXd latents(n, 3);
-      for (Eigen::Index j = 0; j < n; ++j) latents.row(j) = target.truck_latents(j).col(i).transpose();
+      const fleet::HyperVector theta = test::particle_theta(target, i);
+      const Eigen::MatrixXd latents = test::particle_latents(target, n, i);
       const Eigen::VectorXd ssr = target.sums_of_squared_residuals().col(i);
       const Eigen::VectorXd psi = target.psi().col(i);
       offsets.push_back(log_base[i] + loglik[i] -

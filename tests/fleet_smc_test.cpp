@@ -3,6 +3,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "latent_particle.hpp"
+
 #include "fleet/batch_mcmc.hpp"
 #include "fleet/fleet_smc.hpp"
 #include "fleet/posterior_summary.hpp"
@@ -53,10 +55,8 @@ DensityOffsets density_offsets(const fleet::FleetSmc& smc, const Case& c) {
   DensityOffsets d;
   d.scale = std::abs(log_base[0] + loglik[0]);
   for (Eigen::Index i = 0; i < P; ++i) {
-    fleet::HyperVector theta;
-    for (int h = 0; h < fleet::kHyperCount; ++h) theta[h] = target.theta()(h, i);
-    Eigen::MatrixXd latents(n, 3);
-    for (Eigen::Index j = 0; j < n; ++j) latents.row(j) = target.truck_latents(j).col(i).transpose();
+    const fleet::HyperVector theta = test::particle_theta(target, i);
+    const Eigen::MatrixXd latents = test::particle_latents(target, n, i);
     const Eigen::VectorXd ssr = target.sums_of_squared_residuals().col(i);
     d.offsets.push_back(log_base[i] + loglik[i] - fleet::log_posterior_unnormalised(theta, latents, ssr, c.site.sensors(),
                                                                                     fleet::PriorBounds{}, range));
