@@ -28,7 +28,8 @@ struct WheelPath {
 };
 
 // run_batch() advances trucks in blocks of this many, in lock-step (the benchmark's floor kernel
-// uses the same block so the comparison is like for like).
+// uses the same block so the comparison is like for like); a batch of at most 4 or 8 trucks runs
+// in a block of 4 or 8.
 inline constexpr int batch_block_trucks = 16;
 
 // Per-pass extra output: the minimum IF over the whole pass (start to last output position).
@@ -71,6 +72,11 @@ class PassIntegrator {
   // position the index into it, or -1 for a position on the sample grid.
   std::vector<double> distinct_fractions_;
   std::vector<int> position_fraction_slot_;
+
+  // run_batch()'s kernel, BS trucks per block (4, 8 or batch_block_trucks).
+  template <int BS>
+  void run_blocks(const QuarterCarBatch& cars, const Eigen::ArrayXd& speed_mps, const std::vector<WheelPath>& paths,
+                  Eigen::Ref<Eigen::ArrayXXd> if_out, Eigen::ArrayXd* min_if_out) const;
 };
 
 }  // namespace ssrfleet::vehicle
