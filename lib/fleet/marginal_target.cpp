@@ -329,36 +329,52 @@ void MarginalTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen:
                                     const smc::ParallelFor& parallel) {
   const std::size_t n = store_.trucks();
   parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
-    for (Eigen::Index p = begin; p < end; ++p) {
-      const HyperVector th = from_move_coordinates(proposed, p);
-      double lp = options_.prior.log_prior(th);
-      if (lp > kNegInf) lp += log_jacobian(th);
-      double base = kNegInf, inc = 0.0;
-      if (lp > kNegInf) {
-        switch (mode_) {
-          case Mode::kIdle:
-            base = sum_loglik(store_, marginal_, n, th);
-            break;
-          case Mode::kTruck: {
-            base = sum_loglik(store_, marginal_, n - 1, th);
-            inc = marginal_.log_likelihood(store_.view(n - 1), marginal_.prepare(th));
-            break;
-          }
-          case Mode::kCorrection: {
-            base = sum_loglik(*old_store_, *old_marginal_, n, th);
-            inc = sum_loglik(store_, marginal_, n, th) - base;
-            break;
-          }
-        }
+    // The chunk's particles together: the sums over the stored trucks visit the store in
+    // cache-sized blocks for all of them (FleetMarginal::sum_log_likelihood), with the same bits
+    // as a sum per particle.
+    const auto count = static_cast<std::size_t>(end - begin);
+    std::vector<double> lp(count);
+    std::vector<model::ThetaTerms> terms(count), old_terms;
+    std::vector<double> base(count, kNegInf), sums(count);
+    for (std::size_t c = 0; c < count; ++c) {
+      const HyperVector th = from_move_coordinates(proposed, begin + static_cast<Eigen::Index>(c));
+      lp[c] = options_.prior.log_prior(th);
+      if (lp[c] > kNegInf) {
+        lp[c] += log_jacobian(th);
+        terms[c] = marginal_.prepare(th);  // default terms are outside the support: sum -inf
       }
-      if (!(base > kNegInf) || std::isnan(inc)) {
-        base = kNegInf;
-        inc = 0.0;
+    }
+    std::vector<double> inc(count, 0.0);
+    switch (mode_) {
+      case Mode::kIdle:
+        marginal_.sum_log_likelihood(store_, n, terms.data(), count, base.data());
+        break;
+      case Mode::kTruck:
+        marginal_.sum_log_likelihood(store_, n - 1, terms.data(), count, base.data());
+        for (std::size_t c = 0; c < count; ++c)
+          if (lp[c] > kNegInf) inc[c] = marginal_.log_likelihood(store_.view(n - 1), terms[c]);
+        break;
+      case Mode::kCorrection:
+        old_terms.resize(count);
+        for (std::size_t c = 0; c < count; ++c)
+          if (lp[c] > kNegInf)
+            old_terms[c] = old_marginal_->prepare(from_move_coordinates(proposed, begin + static_cast<Eigen::Index>(c)));
+        old_marginal_->sum_log_likelihood(*old_store_, n, old_terms.data(), count, base.data());
+        marginal_.sum_log_likelihood(store_, n, terms.data(), count, sums.data());
+        for (std::size_t c = 0; c < count; ++c) inc[c] = sums[c] - base[c];
+        break;
+    }
+    for (std::size_t c = 0; c < count; ++c) {
+      const Eigen::Index p = begin + static_cast<Eigen::Index>(c);
+      double b = lp[c] > kNegInf ? base[c] : kNegInf, i = lp[c] > kNegInf ? inc[c] : 0.0;
+      if (!(b > kNegInf) || std::isnan(i)) {
+        b = kNegInf;
+        i = 0.0;
       }
-      proposed_base_sum_[p] = base;
-      proposed_inc_[p] = inc;
-      log_base[p] = base == kNegInf ? kNegInf : lp + base;
-      loglik[p] = inc;
+      proposed_base_sum_[p] = b;
+      proposed_inc_[p] = i;
+      log_base[p] = b == kNegInf ? kNegInf : lp[c] + b;
+      loglik[p] = i;
     }
   });
 }

@@ -85,4 +85,26 @@ double FleetMarginal::log_likelihood(const TableView& table, const ThetaTerms& t
   return t.constant - 0.5 * std::log(t.lateral_var_m2) + static_cast<double>(top) + std::log(sum);
 }
 
+void FleetMarginal::sum_log_likelihood(const TableStore& store, std::size_t end, const ThetaTerms* terms,
+                                       std::size_t count, double* sums) const {
+  for (std::size_t p = 0; p < count; ++p) sums[p] = terms[p].inside ? 0.0 : kNegInf;
+  const auto& offset = store.columns().offset;
+  std::size_t first = 0;
+  while (first < end) {
+    // The block: trucks [first, last) holding about kBlockEntries entries (at least one truck).
+    std::size_t last = first + 1;
+    while (last < end && offset[last] - offset[first] < kBlockEntries) ++last;
+    for (std::size_t p = 0; p < count; ++p) {
+      double s = sums[p];
+      if (s == kNegInf) continue;
+      for (std::size_t i = first; i < last; ++i) {
+        s += log_likelihood(store.view(i), terms[p]);
+        if (s == kNegInf) break;
+      }
+      sums[p] = s;
+    }
+    first = last;
+  }
+}
+
 }  // namespace ssrfleet::model
