@@ -25,7 +25,7 @@ inline Eigen::ArrayXXd simulate(const site::Site& site, double speed_mps, double
   const auto n = static_cast<Eigen::Index>(k.size());
   Eigen::ArrayXXd out(site.sensors(), n);
   // Chunks of whole integrator blocks; a small batch stays in one call.
-  constexpr Eigen::Index kChunk = 4 * vehicle::batch_block_trucks;
+  constexpr Eigen::Index kChunk = vehicle::batch_block_trucks;
   const Eigen::Index chunks = (n + kChunk - 1) / kChunk;
   parallel(chunks, [&](Eigen::Index cb, Eigen::Index ce) {
     const Eigen::Index begin = cb * kChunk, end = std::min(n, ce * kChunk);

@@ -336,10 +336,17 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
       }
       const Eigen::ArrayXXd ifs = simulate(site, speed_mps, sprung_mass_kg, k, kt, z, parallel);
       table.passes += static_cast<int>(k.size());
+      // Each node's z-integral is its own (in parallel, then gathered in order: the same bits).
+      std::vector<std::vector<NodeResult>> results(pending.size());
+      parallel(static_cast<Eigen::Index>(pending.size()), [&](Eigen::Index begin, Eigen::Index end) {
+        for (Eigen::Index p = begin; p < end; ++p) {
+          results[static_cast<std::size_t>(p)] =
+              integrate_node(ifs.middleCols(p * lines, lines), first_line, surface, impact_factors, u_ref, rule,
+                             options.max_piece_sd_m, options.lateral_check);
+        }
+      });
       for (std::size_t p = 0; p < pending.size(); ++p) {
-        std::vector<NodeResult> pieces =
-            integrate_node(ifs.middleCols(static_cast<Eigen::Index>(p) * lines, lines), first_line, surface,
-                           impact_factors, u_ref, rule, options.max_piece_sd_m, options.lateral_check);
+        std::vector<NodeResult>& pieces = results[p];
         for (const NodeResult& r : pieces) {
           best_score = std::max(best_score, score(pending[p], r));
           best_log_i = std::max(best_log_i, r.log_i_ref);
