@@ -9,6 +9,7 @@
 #include <memory>
 #include <sstream>
 
+#include "discrepancy/marginal_draws.hpp"
 #include "discrepancy/posterior_draws.hpp"
 #include "fleet/online_fit.hpp"
 #include "fleet/replay.hpp"
@@ -22,8 +23,13 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-// A fitted SMC together with the extension it points at (which must outlive it). The latent
-// core: the checks need every truck's latents, and an extension's ψ rides in its particles.
+// A fitted SMC together with the extension it points at (which must outlive it). The base model
+// runs on the marginal core (DESIGN.md §4): its checks draw every truck's latents from their exact
+// conditional given θ (marginal_draws.hpp). An extension's refit runs on the latent core, which
+// carries ψ in its particles and re-simulates every kept truck when ψ moves: the marginal core's
+// tables hold one forward model, and the effects that change it (a sensor's gain, the dynamics, a
+// profile defect) would each need tables over a grid of ψ (DESIGN.md §4 allows either at diagnose
+// sizes of about 100 trucks; README, "Diagnosing model discrepancy", has the costs).
 struct Fitted {
   std::unique_ptr<fleet::ModelExtension> extension;
   std::unique_ptr<fleet::OnlineFit> online;
@@ -36,7 +42,7 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
   Fitted f;
   f.extension = std::move(extension);
   fleet::OnlineFitOptions so;
-  so.core = fleet::OnlineFitOptions::Core::kLatent;
+  so.core = f.extension ? fleet::OnlineFitOptions::Core::kLatent : fleet::OnlineFitOptions::Core::kMarginal;
   so.sampler().particles = o.particles;
   so.sampler().threads = o.threads;
   so.sampler().seed = o.seed;
@@ -44,7 +50,7 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
   f.online = fleet::make_online_fit(site, so);
   const std::string label = f.extension ? f.extension->name() : std::string("base model");
   const auto start = Clock::now();
-  fleet::ReplayOptions replay;  // the stages, then the same final sweeps as `fit --core latent`
+  fleet::ReplayOptions replay;  // the stages, then the same final sweeps as `fit` on that core
   replay.final_sweeps = o.final_sweeps;
   replay.after_record = [&](std::size_t t, const smc::StageSummary& stage, const fleet::OnlineFit&) {
     if (t >= heldout_from) f.fit.heldout_log_score += stage.log_evidence_increment;
@@ -55,10 +61,17 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
     }
   };
   fleet::replay(*f.online, records, replay);
-  f.fit.log_evidence = f.smc().sampler().log_evidence();
+  f.fit.log_evidence = f.online->sampler().log_evidence();
   f.fit.wall_s = seconds_since(start);
-  f.fit.integrator_passes = f.smc().target().integrator_passes();
-  const auto hyper = fleet::summarise_weighted(f.smc().target().theta(), f.smc().sampler().weights());
+  const Eigen::MatrixXd* theta = nullptr;
+  if (const fleet::FleetSmc* latent = f.online->latent()) {
+    f.fit.integrator_passes = latent->target().integrator_passes();
+    theta = &latent->target().theta();
+  } else {
+    f.fit.integrator_passes = f.online->marginal()->target().integrator_passes();
+    theta = &f.online->marginal()->target().theta();
+  }
+  const auto hyper = fleet::summarise_weighted(*theta, f.online->sampler().weights());
   std::copy(hyper.begin(), hyper.end(), f.fit.hyper.begin());
   return f;
 }
@@ -76,7 +89,12 @@ CheckReport check(const site::Site& site, const Fitted& f, const DiagnoseOptions
   co.alpha = o.alpha;
   co.replicates = o.replicates;
   co.seed = o.seed;
-  return run_checks(posterior_draws(site, f.smc(), o.draws, o.seed, o.threads), co);
+  if (f.online->latent() != nullptr) return run_checks(posterior_draws(site, f.smc(), o.draws, o.seed, o.threads), co);
+  MarginalDrawOptions d;
+  d.draws = o.draws;
+  d.seed = o.seed;
+  d.threads = o.threads;
+  return run_checks(posterior_draws(site, *f.online->marginal(), d), co);
 }
 
 std::vector<std::string> matched_checks(const fleet::ModelExtension& ext, const CheckReport& report) {

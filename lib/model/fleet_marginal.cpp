@@ -43,23 +43,11 @@ ThetaTerms FleetMarginal::prepare(const fleet::HyperVector& theta) const {
   return t;
 }
 
-double FleetMarginal::log_likelihood(const TableView& table, const ThetaTerms& t) const {
-  if (!t.inside) return kNegInf;
+void FleetMarginal::entry_exponents(const TableView& table, const ThetaTerms& t, float* exponents) const {
   const std::size_t n = table.nodes;
-  // s²(u) = s²_ref u_ref / u: the z-posterior narrows as σ_IF does (exact for a quadratic bowl).
-  // V_g = σ_z² (1 + ε_g), ε_g = s²_g u_ref / (u σ_z²) below 1e-2 in practice: expand log V_g and
-  // 1 / V_g to second order in ε_g rather than pay a log and a division per node.
-  //
-  // The map runs in single precision (the header, "Precision"): the table is float already, and
-  // float doubles the SIMD width of the map and of the exponential, where a fit spends most of
-  // its time. Two passes, so the compiler vectorises the first (an element-wise map with no
-  // loop-carried state; a running max in the same loop kept it scalar) and Eigen the max and the
-  // exponential sum.
   const float eps_per_var = static_cast<float>(table.u_ref / (t.u * t.lateral_var_m2));
   const float inv_2var = static_cast<float>(0.5 / t.lateral_var_m2);
-  thread_local std::vector<float> exponents;
-  exponents.resize(n);
-  float* __restrict out = exponents.data();
+  float* __restrict out = exponents;
   const std::int32_t* __restrict k_index = table.k_index;
   const std::int32_t* __restrict kt_index = table.kt_index;
   const float* __restrict c = table.c;
@@ -78,6 +66,24 @@ double FleetMarginal::log_likelihood(const TableView& table, const ThetaTerms& t
     out[g] = c[g] - m[g] * half_u - bb[g] * log_u - 0.5f * (a * a + b * b) - 0.5f * eps -
              dz * dz * inv_2var * (1.0f - eps + eps * eps);
   }
+}
+
+double FleetMarginal::log_likelihood(const TableView& table, const ThetaTerms& t) const {
+  if (!t.inside) return kNegInf;
+  const std::size_t n = table.nodes;
+  // s²(u) = s²_ref u_ref / u: the z-posterior narrows as σ_IF does (exact for a quadratic bowl).
+  // V_g = σ_z² (1 + ε_g), ε_g = s²_g u_ref / (u σ_z²) below 1e-2 in practice: expand log V_g and
+  // 1 / V_g to second order in ε_g rather than pay a log and a division per node.
+  //
+  // The map runs in single precision (the header, "Precision"): the table is float already, and
+  // float doubles the SIMD width of the map and of the exponential, where a fit spends most of
+  // its time. Two passes, so the compiler vectorises the first (an element-wise map with no
+  // loop-carried state; a running max in the same loop kept it scalar) and Eigen the max and the
+  // exponential sum.
+  thread_local std::vector<float> exponents;
+  exponents.resize(n);
+  const float* out = exponents.data();
+  entry_exponents(table, t, exponents.data());
   const Eigen::Map<const Eigen::ArrayXf> e(out, static_cast<Eigen::Index>(n));
   const float top = n > 0 ? e.maxCoeff() : -std::numeric_limits<float>::infinity();
   if (!(top > -std::numeric_limits<float>::infinity())) return kNegInf;

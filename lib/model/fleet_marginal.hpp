@@ -56,6 +56,10 @@ class FleetMarginal {
   double log_likelihood(const TruckTable& table, const ThetaTerms& terms) const {
     return log_likelihood(view_of(table), terms);
   }
+  // The node sum's terms before the exponential: ℓ_i(θ) = constant(θ) - ½ log σ_z² + log Σ_g exp(e_g),
+  // e_g written to exponents[g] for each of table.nodes entries (the truck's latent posterior
+  // given θ puts weight ∝ exp(e_g) on entry g: model/table_proposal.hpp).
+  void entry_exponents(const TableView& table, const ThetaTerms& terms, float* exponents) const;
   // Σ_{i<end} ℓ_i(θ_p) for many particles at once: sums[p] for terms[p], p < count (-inf outside
   // the support). The same bits as adding log_likelihood() over the trucks in order, particle by
   // particle; but the trucks are visited in blocks that stay in the core's cache while every

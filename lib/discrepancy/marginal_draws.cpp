@@ -1,0 +1,164 @@
+#include "discrepancy/marginal_draws.hpp"
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "model/fleet_model.hpp"
+#include "model/table_proposal.hpp"
+#include "smc/parallel.hpp"
+#include "smc/resampling.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::discrepancy {
+
+namespace {
+
+constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+
+// log p(y | x, σ) + log p(x | θ) up to a constant shared by every x of the truck: the exact target
+// of the MH correction, from the IFs of one integrator pass at x.
+double log_target(const Eigen::Ref<const Eigen::VectorXd>& observed, const Eigen::Ref<const Eigen::ArrayXd>& model_if,
+                  const model::TruckLatent& x, const fleet::HyperVector& theta) {
+  using namespace fleet;
+  const double sigma = theta[kSigmaIf];
+  const double ssr = (observed.array() - model_if).square().sum();
+  return -0.5 * ssr / (sigma * sigma) + log_normal_density(x.stiffness_npm, theta[kK], theta[kSigmaK]) +
+         log_normal_density(x.tyre_stiffness_npm, theta[kKt], theta[kSigmaKt]) +
+         log_normal_density(x.lateral_m, theta[kZ], theta[kSigmaZ]);
+}
+
+}  // namespace
+
+TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::MarginalTarget& target,
+                                    const fleet::HyperVector& theta, const smc::RngFactory& streams, int mh_steps,
+                                    MarginalDrawStats* stats) {
+  const auto n = static_cast<Eigen::Index>(target.trucks());
+  const int M = site.sensors();
+  const double lo = site.lateral_min_m(), hi = site.lateral_max_m();
+  std::vector<smc::Rng> rng;
+  std::vector<model::TableProposal> proposal;
+  rng.reserve(static_cast<std::size_t>(n));
+  proposal.reserve(static_cast<std::size_t>(n));
+  site::TruckBatch batch;
+  batch.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto t = static_cast<std::size_t>(i);
+    rng.push_back(streams.stream(static_cast<std::uint64_t>(i)));
+    proposal.emplace_back(target.tables().view(t), target.marginal(), theta);
+    batch.speed_mps[i] = target.speed_mps()[t];
+    batch.sprung_mass_kg[i] = target.sprung_mass_kg()[t];
+  }
+  std::vector<model::TruckLatent> x(static_cast<std::size_t>(n)), y(static_cast<std::size_t>(n));
+  std::vector<double> log_p(static_cast<std::size_t>(n), kNegInf), log_q(static_cast<std::size_t>(n));
+  Eigen::ArrayXXd f(M, n), g(M, n);
+  long proposals = 0, accepted = 0;
+  auto in_support = [&](const model::TruckLatent& c) {
+    return c.stiffness_npm > 0.0 && c.tyre_stiffness_npm > 0.0 && c.lateral_m >= lo && c.lateral_m <= hi;
+  };
+  // Step 0 draws every truck's first state from its proposal (truncated to the support by
+  // redrawing); steps 1.. propose and accept. A proposal outside the support has target density 0:
+  // it is simulated at the current state (any admissible car will do) and rejected.
+  for (int step = 0; step <= mh_steps; ++step) {
+    std::vector<char> admissible(static_cast<std::size_t>(n));
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto t = static_cast<std::size_t>(i);
+      model::TruckLatent cand = proposal[t].draw(rng[t]);
+      for (int tries = 0; step == 0 && tries < 1000 && !in_support(cand); ++tries) cand = proposal[t].draw(rng[t]);
+      admissible[t] = in_support(cand);
+      if (step == 0 && !admissible[t]) {
+        throw NumericalError("posterior checks: truck " + std::to_string(i + 1) +
+                             "'s table proposes no admissible latents");
+      }
+      y[t] = cand;
+      const model::TruckLatent& run = admissible[t] ? cand : x[t];
+      batch.stiffness_npm[i] = run.stiffness_npm;
+      batch.tyre_stiffness_npm[i] = run.tyre_stiffness_npm;
+      batch.lateral_m[i] = run.lateral_m;
+    }
+    site.impact_factors(batch, g);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto t = static_cast<std::size_t>(i);
+      if (step > 0) ++proposals;
+      if (!admissible[t]) continue;
+      const double lp = log_target(target.observed_if()[t], g.col(i), y[t], theta);
+      const double lq = proposal[t].log_density(y[t]);
+      bool take = step == 0;
+      if (!take) {
+        const double log_ratio = (lp - log_p[t]) + (log_q[t] - lq);
+        take = log_ratio >= 0.0 || fleet::uniform_open01(rng[t]) < std::exp(log_ratio);
+        if (take) ++accepted;
+      }
+      if (take) {
+        x[t] = y[t];
+        log_p[t] = lp;
+        log_q[t] = lq;
+        f.col(i) = g.col(i);
+      }
+    }
+  }
+  if (stats != nullptr) {
+    stats->proposals += proposals;
+    stats->accepted += accepted;
+  }
+  return {std::move(x), f.matrix()};
+}
+
+PosteriorDraws posterior_draws(const site::Site& site, const fleet::MarginalSmc& fit, const MarginalDrawOptions& o,
+                               MarginalDrawStats* stats) {
+  if (o.draws < 1) throw UsageError("posterior checks: draws must be at least 1");
+  if (o.mh_steps < 0) throw UsageError("posterior checks: mh_steps must be >= 0");
+  if (o.threads < 1) throw UsageError("posterior checks: threads must be at least 1");
+  const fleet::MarginalTarget& target = fit.target();
+  const auto n = static_cast<Eigen::Index>(target.trucks());
+  PosteriorDraws out;
+  out.observed.resize(site.sensors(), n);
+  out.speed_mps.resize(n);
+  out.sprung_mass_kg.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto t = static_cast<std::size_t>(i);
+    out.observed.col(i) = target.observed_if()[t];
+    out.speed_mps[i] = target.speed_mps()[t];
+    out.sprung_mass_kg[i] = target.sprung_mass_kg()[t];
+  }
+  const smc::RngFactory root = smc::RngFactory(o.seed).child(0x636865636bULL /* "check" */);
+  smc::Rng pick = root.child(0).stream(0);
+  const auto chosen = smc::systematic_resampling(fit.sampler().weights(), o.draws, pick);
+  out.model_if.assign(chosen.size(), Eigen::MatrixXd());
+  out.lateral_m.assign(chosen.size(), Eigen::VectorXd());
+  out.sigma_if.assign(chosen.size(), 0.0);
+  out.stiffness_pit.assign(chosen.size(), Eigen::VectorXd());
+  std::vector<MarginalDrawStats> per_draw(chosen.size());
+  const smc::ParallelFor parallel(o.threads);
+  parallel(static_cast<Eigen::Index>(chosen.size()), [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index d = begin; d < end; ++d) {
+      const auto slot = static_cast<std::size_t>(d);
+      const Eigen::Index p = chosen[slot];
+      fleet::HyperVector theta;
+      for (int j = 0; j < fleet::kHyperCount; ++j) theta[static_cast<std::size_t>(j)] = target.theta()(j, p);
+      // Each (draw, truck) has its own stream: the draws do not depend on the thread count.
+      TruckLatentDraws drawn =
+          draw_truck_latents(site, target, theta, root.child(1, static_cast<std::uint64_t>(d)), o.mh_steps, &per_draw[slot]);
+      Eigen::VectorXd lateral(n), pit(n);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const auto& x = drawn.latents[static_cast<std::size_t>(i)];
+        lateral[i] = x.lateral_m;
+        pit[i] = fleet::normal_cdf((x.stiffness_npm - theta[fleet::kK]) / theta[fleet::kSigmaK]);
+      }
+      out.model_if[slot] = std::move(drawn.model_if);
+      out.lateral_m[slot] = lateral;
+      out.sigma_if[slot] = theta[fleet::kSigmaIf];
+      out.stiffness_pit[slot] = pit;
+    }
+  });
+  if (stats != nullptr) {
+    for (const auto& s : per_draw) {
+      stats->proposals += s.proposals;
+      stats->accepted += s.accepted;
+    }
+  }
+  return out;
+}
+
+}  // namespace ssrfleet::discrepancy
