@@ -1,6 +1,6 @@
 // Latents drawn from a marginal-core fit (discrepancy/marginal_draws.hpp): the table's proposal
 // corrected by Metropolis-Hastings with the integrator must give draws from the exact conditional
-// p(k, k_t | y, θ), which brute-force integration computes independently.
+// p(k, k_t, z | y, θ), whose moments brute-force integration computes independently.
 #include <cmath>
 #include <vector>
 
@@ -18,12 +18,13 @@ using namespace ssrfleet;
 namespace {
 
 struct Moments {
-  double mean_k = 0.0, sd_k = 0.0, mean_kt = 0.0, sd_kt = 0.0;
+  double mean_k = 0.0, sd_k = 0.0, mean_kt = 0.0, sd_kt = 0.0, mean_z = 0.0, sd_z = 0.0;
 };
 
-// E and sd of k and k_t under p(k, k_t | y, θ) ∝ N(k | K, σ_k²) N(k_t | K_t, σ_kt²) ∫ p(y | k, k_t, z)
-// N(z | Z, σ_z²) dz, by a 41 x 41 rectangle rule over ±8 sd of the fit's likelihood combined with the
-// fleet (error far below the Monte Carlo tolerance), the z-integral by the brute-force reference.
+// E and sd of k, k_t and z under p(k, k_t, z | y, θ), with p(k, k_t | y, θ) ∝ N(k | K, σ_k²)
+// N(k_t | K_t, σ_kt²) ∫ p(y | k, k_t, z) N(z | Z, σ_z²) dz by a 41 x 41 rectangle rule over ±8 sd of
+// the fit's likelihood combined with the fleet (error far below the Monte Carlo tolerance), and the
+// z-integral and z's moments at each node by the brute-force reference.
 Moments exact_moments(const site::Site& site, const records::WimRecord& r, const fleet::HyperVector& th) {
   model::TruckTableOptions o;
   o.sigma_ref = th[fleet::kSigmaIf];
@@ -35,20 +36,23 @@ Moments exact_moments(const site::Site& site, const records::WimRecord& r, const
   const double ckt = (f.tyre_stiffness_npm / (lkt * lkt) + th[fleet::kKt] / (skt * skt)) * wkt * wkt;
   constexpr int G = 41;
   constexpr double R = 8.0;
-  std::vector<double> k, kt, logw;
+  std::vector<double> k, kt, logw, z1, z2;
   for (int a = 0; a < G; ++a) {
     for (int b = 0; b < G; ++b) {
       const double x = ck - R * wk + 2 * R * wk * a / (G - 1), y = ckt - R * wkt + 2 * R * wkt * b / (G - 1);
       if (x <= 0.0 || y <= 0.0) continue;
       k.push_back(x);
       kt.push_back(y);
+      model::ZMoments zm;
       logw.push_back(model::reference_log_z_integral(site, r.speed_mps, r.sprung_mass_kg, r.impact_factor, x, y,
-                                                     th[fleet::kSigmaIf], th[fleet::kZ], th[fleet::kSigmaZ]) +
+                                                     th[fleet::kSigmaIf], th[fleet::kZ], th[fleet::kSigmaZ], &zm) +
                      fleet::log_normal_density(x, th[fleet::kK], sk) + fleet::log_normal_density(y, th[fleet::kKt], skt));
+      z1.push_back(zm.mean);
+      z2.push_back(zm.second);
     }
   }
   const double top = *std::max_element(logw.begin(), logw.end());
-  double w0 = 0, k1 = 0, k2 = 0, t1 = 0, t2 = 0;
+  double w0 = 0, k1 = 0, k2 = 0, t1 = 0, t2 = 0, s1 = 0, s2 = 0;
   for (std::size_t g = 0; g < k.size(); ++g) {
     const double w = std::exp(logw[g] - top);
     w0 += w;
@@ -56,18 +60,22 @@ Moments exact_moments(const site::Site& site, const records::WimRecord& r, const
     k2 += w * k[g] * k[g];
     t1 += w * kt[g];
     t2 += w * kt[g] * kt[g];
+    s1 += w * z1[g];
+    s2 += w * z2[g];
   }
   Moments m;
   m.mean_k = k1 / w0;
   m.sd_k = std::sqrt(k2 / w0 - m.mean_k * m.mean_k);
   m.mean_kt = t1 / w0;
   m.sd_kt = std::sqrt(t2 / w0 - m.mean_kt * m.mean_kt);
+  m.mean_z = s1 / w0;
+  m.sd_z = std::sqrt(s2 / w0 - m.mean_z * m.mean_z);
   return m;
 }
 
 }  // namespace
 
-TEST_CASE("latents drawn from a marginal-core fit follow the exact conditional of k and k_t", "[discrepancy][model]") {
+TEST_CASE("latents drawn from a marginal-core fit follow the exact conditional of k, k_t and z", "[discrepancy][model]") {
   const site::Site site(site::load_road("AS1"), site::SiteOptions{});
   const auto trucks = fleet::draw_fleet(fleet::FleetDistribution{}, 30, site.lateral_min_m(), site.lateral_max_m(), 5);
   const auto log = fleet::simulate_log(site, trucks, 0.02, 5);
@@ -79,7 +87,7 @@ TEST_CASE("latents drawn from a marginal-core fit follow the exact conditional o
   // θ at the truth: the tables' lattice and nodes were chosen around the posterior, which holds it.
   const fleet::HyperVector theta{500e3, 50e3, 1950e3, 195e3, 1.5, 0.5, 0.02};
   constexpr int kDraws = 1500;
-  std::vector<std::vector<double>> k(3), kt(3);
+  std::vector<std::vector<double>> k(3), kt(3), z(3);
   discrepancy::MarginalDrawStats stats;
   const smc::RngFactory root(2024);
   for (int d = 0; d < kDraws; ++d) {
@@ -89,6 +97,7 @@ TEST_CASE("latents drawn from a marginal-core fit follow the exact conditional o
     for (int i = 0; i < 3; ++i) {
       k[static_cast<std::size_t>(i)].push_back(drawn.latents[static_cast<std::size_t>(i)].stiffness_npm);
       kt[static_cast<std::size_t>(i)].push_back(drawn.latents[static_cast<std::size_t>(i)].tyre_stiffness_npm);
+      z[static_cast<std::size_t>(i)].push_back(drawn.latents[static_cast<std::size_t>(i)].lateral_m);
     }
   }
   // The independence sampler starts from the table's mixture, which is close to the target.
@@ -105,8 +114,10 @@ TEST_CASE("latents drawn from a marginal-core fit follow the exact conditional o
     };
     const auto [mk, sdk] = mean_sd(k[static_cast<std::size_t>(i)]);
     const auto [mkt, sdkt] = mean_sd(kt[static_cast<std::size_t>(i)]);
+    const auto [mz, sdz] = mean_sd(z[static_cast<std::size_t>(i)]);
     INFO("truck " << i << ": k " << mk << " +- " << sdk << " (exact " << exact.mean_k << " +- " << exact.sd_k << "), k_t "
-                  << mkt << " +- " << sdkt << " (exact " << exact.mean_kt << " +- " << exact.sd_kt << ")");
+                  << mkt << " +- " << sdkt << " (exact " << exact.mean_kt << " +- " << exact.sd_kt << "), z " << mz
+                  << " +- " << sdz << " (exact " << exact.mean_z << " +- " << exact.sd_z << ")");
     // Independent chains, one draw each: the mean's Monte Carlo sd is sd / sqrt(draws), the sd's
     // about sd / sqrt(2 draws); 4 of them each.
     const double n = kDraws;
@@ -114,6 +125,8 @@ TEST_CASE("latents drawn from a marginal-core fit follow the exact conditional o
     CHECK(std::abs(mkt - exact.mean_kt) < 4.0 * exact.sd_kt / std::sqrt(n));
     CHECK(std::abs(sdk / exact.sd_k - 1.0) < 4.0 / std::sqrt(2.0 * n));
     CHECK(std::abs(sdkt / exact.sd_kt - 1.0) < 4.0 / std::sqrt(2.0 * n));
+    CHECK(std::abs(mz - exact.mean_z) < 4.0 * exact.sd_z / std::sqrt(n));
+    CHECK(std::abs(sdz / exact.sd_z - 1.0) < 4.0 / std::sqrt(2.0 * n));
   }
 }
 

@@ -421,7 +421,7 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
 double reference_log_z_integral(const site::Site& site, double speed_mps, double sprung_mass_kg,
                                 const Eigen::Ref<const Eigen::VectorXd>& impact_factors, double stiffness_npm,
                                 double tyre_stiffness_npm, double sigma_if, double lateral_mean_m,
-                                double lateral_sd_m) {
+                                double lateral_sd_m, ZMoments* z_moments) {
   check_inputs(site, impact_factors);
   const road::Surface& surface = site.surface();
   const Eigen::Index L = surface.lines();
@@ -436,7 +436,7 @@ double reference_log_z_integral(const site::Site& site, double speed_mps, double
   const double lo = site.lateral_min_m(), hi = site.lateral_max_m();
   const double mass = 0.5 * (std::erfc(-(hi - lateral_mean_m) / (lateral_sd_m * std::numbers::sqrt2)) -
                              std::erfc(-(lo - lateral_mean_m) / (lateral_sd_m * std::numbers::sqrt2)));
-  std::vector<double> terms;
+  std::vector<double> terms, at;
   for (Eigen::Index j = 0; j + 1 < L; ++j) {
     const Eigen::VectorXd ea = impact_factors - ifs.col(j).matrix();
     const Eigen::VectorXd d = (ifs.col(j + 1) - ifs.col(j)).matrix();
@@ -449,12 +449,19 @@ double reference_log_z_integral(const site::Site& site, double speed_mps, double
         const double t = (zz - lateral_mean_m) / lateral_sd_m;
         terms.push_back(std::log(rule.weights[p] * surface.dy_m / kSub) - 0.5 * u * ssr - 0.5 * t * t -
                         std::log(lateral_sd_m * std::sqrt(2.0 * std::numbers::pi) * mass));
+        at.push_back(zz);
       }
     }
   }
   const double top = *std::max_element(terms.begin(), terms.end());
-  double sum = 0.0;
-  for (double t : terms) sum += std::exp(t - top);
+  double sum = 0.0, first = 0.0, second = 0.0;
+  for (std::size_t i = 0; i < terms.size(); ++i) {
+    const double w = std::exp(terms[i] - top);
+    sum += w;
+    first += w * at[i];
+    second += w * at[i] * at[i];
+  }
+  if (z_moments != nullptr) *z_moments = ZMoments{first / sum, second / sum};
   return top + std::log(sum);
 }
 

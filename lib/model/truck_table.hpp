@@ -163,10 +163,15 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
 
 // The brute-force reference the tables are tested against: log ∫ exp(-u SSR(k, kt, z) / 2)
 // N(z | Z, σ_z²) dz over the whole road width at one (k, k_t), by adaptive composite
-// Gauss–Legendre on every segment (z prior truncated to the road and normalised).
+// Gauss–Legendre on every segment (z prior truncated to the road and normalised). With
+// `z_moments`, also E[z] and E[z²] under the normalised integrand (the conditional of z at that
+// (k, k_t)), for tests of drawn latents.
+struct ZMoments {
+  double mean = 0.0, second = 0.0;
+};
 double reference_log_z_integral(const site::Site& site, double speed_mps, double sprung_mass_kg,
                                 const Eigen::Ref<const Eigen::VectorXd>& impact_factors, double stiffness_npm,
                                 double tyre_stiffness_npm, double sigma_if, double lateral_mean_m,
-                                double lateral_sd_m);
+                                double lateral_sd_m, ZMoments* z_moments = nullptr);
 
 }  // namespace ssrfleet::model
