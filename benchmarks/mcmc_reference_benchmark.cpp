@@ -6,6 +6,8 @@
 //
 //   mcmc_reference_benchmark [--fleet table1|second] [--trucks 1000] [--iterations 45000]
 //                            [--burn-in 5000] [--seed 7] [--json FILE]
+//                            [--interweave-stiffness 0|1] [--joint-jump-every J]
+// The last two override BatchMcmcOptions' defaults, to measure those options side by side.
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -25,6 +27,7 @@ int main(int argc, char** argv) {
   std::string fleet_name = "table1", json_path;
   int trucks = 1000, iterations = 45000, burn_in = 5000;
   std::uint64_t seed = 7;
+  fleet::BatchMcmcOptions o;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
@@ -34,9 +37,12 @@ int main(int argc, char** argv) {
     else if (a == "--burn-in") burn_in = std::stoi(next());
     else if (a == "--seed") seed = std::stoull(next());
     else if (a == "--json") json_path = next();
+    else if (a == "--interweave-stiffness") o.interweave_stiffness = std::stoi(next()) != 0;
+    else if (a == "--joint-jump-every") o.joint_jump_every = std::stoi(next());
     else {
       std::cerr << "usage: mcmc_reference_benchmark [--fleet " << bench::fleet_preset_names()
-                << "] [--trucks N] [--iterations I] [--burn-in B] [--seed S] [--json FILE]\n";
+                << "] [--trucks N] [--iterations I] [--burn-in B] [--seed S] [--json FILE]"
+                   " [--interweave-stiffness 0|1] [--joint-jump-every J]\n";
       return a == "--help" ? 0 : 64;
     }
   }
@@ -47,7 +53,6 @@ int main(int argc, char** argv) {
   }
   const site::Site site(site::load_road(preset->road), site::SiteOptions{});
   const fleet::SimulatedLog log = bench::simulate_preset(site, *preset, trucks, 1);
-  fleet::BatchMcmcOptions o;
   o.iterations = iterations;
   o.burn_in = burn_in;
   o.seed = seed;
@@ -68,6 +73,13 @@ int main(int argc, char** argv) {
   j["burn_in"] = burn_in;
   j["seed"] = seed;
   j["lateral_jump_every"] = o.lateral_jump_every;
+  j["joint_jump_every"] = o.joint_jump_every;
+  j["interweave_stiffness"] = o.interweave_stiffness;
+  j["integrator_passes"] = r.integrator_passes;
+  j["lateral_jump_acceptance"] = r.lateral_jump_acceptance;
+  j["joint_jump_acceptance"] = r.joint_jump_acceptance;
+  j["ancillary_k_acceptance"] = r.ancillary_k_acceptance;
+  j["ancillary_kt_acceptance"] = r.ancillary_kt_acceptance;
   j["wall_s"] = r.wall_seconds;
   j["load_1min_before_after"] = {load_before, bench::load_average_1min()};
   j["commit"] = bench::run_command("git rev-parse --short HEAD 2>/dev/null");
@@ -85,6 +97,8 @@ int main(int argc, char** argv) {
   j["min_ess"] = min_ess;
   j["ess_at_least_1000"] = min_ess >= 1000.0;
   if (!json_path.empty()) std::ofstream(json_path) << j.dump(2) << "\n";
+  std::cout << "passes " << r.integrator_passes << ", lateral jump acceptance " << r.lateral_jump_acceptance
+            << ", joint jump acceptance " << r.joint_jump_acceptance << "\n";
   std::cout << "min ESS " << min_ess << (min_ess >= 1000.0 ? " (>= 1000)" : " (BELOW 1000)") << ", wall "
             << r.wall_seconds << " s\n";
   return min_ess >= 1000.0 ? 0 : 3;

@@ -298,23 +298,31 @@ Moments weighted_moments(const Eigen::VectorXd& x, const Eigen::ArrayXd& w) {
 // so rather than passing), then the offset to be under 0.25 sd: at least 3 Monte Carlo sd, so a
 // failure flags a difference between the samplers' posteriors, not their noise.
 //
-// Measured (commit of this comment, 2 cores shared, 730 s in all; 50 trucks, 1024 particles and
+// One section per extension (run one alone with -c <name>; the WARN records its numbers).
+//
+// Measured (commit of this comment, 2 cores shared with other jobs; 50 trucks, 1024 particles and
 // 50 final sweeps per SMC run, 30,000 MCMC sweeps of which 25,000 kept; largest |offset| over the
-// 7 + d parameters, and the Monte Carlo sd it is judged against):
-//   sensor_gain 0.05 sd, suspension_damping 0.11, tyre_damping 0.06, unsprung_mass 0.05: pass
-//   (MCMC ESS >= 200, SMC se <= 0.03 sd);
-//   speed_bias 0.29 (sigma_kt) and <= 0.07 elsewhere: the SMC's own error is too large for the
-//   check (its two seeds differ by 0.41 sd on sigma_kt, pooled se 0.094 sd > 0.083);
-//   profile_defect <= 0.15 sd, but both samplers are far from precise along the defect's
-//   length-height ridge (MCMC ESS 7 on height, 10 on length; the SMC's seeds differ by 1.07 sd on
-//   height): fails the Monte Carlo check;
-//   second_class: a real disagreement, sigma_IF 4.2 sd, K 1.8 sd, sigma_kt 1.1 sd: in the MCMC one
-//   stiff truck (k 1.23e6 N/m in the data) stays in another joint (k, k_t, z) mode, k 3.8e5 at
-//   z 2.11 m instead of 0.95 m, which the random walk and the lateral jumps (z alone) cannot leave;
-//   its best-fit start (model/truck_fit) already put it there (k 3.6e5, k_t 3.1e6, z 2.10), while
-//   both SMC runs put all their weight on k 1.20e6, k_t 2.2e6, z 0.98 (sigma_IF 0.01964 against the
-//   MCMC's 0.02229). The SMC's two seeds also differ by 3.0 sd on K, so its own error is too large
-//   here as well.
+// 7 + d parameters; SMC time for its 2 runs, MCMC time for its 30,000 sweeps):
+//   second_class 0.065 sd (sigma_k2), SMC se 0.025 sd, min MCMC ESS 977 (sigma_kt); pass.
+//     SMC 201 s, MCMC 20 s. Before: one stiff truck stuck in a softer (k, k_t, z) mode in the MCMC
+//     (sigma_IF 4.2 sd off), and a label-swapped mixture mode one SMC seed gave 10 % of its weight
+//     and the MCMC never visited: now the joint latent jumps (BatchMcmcOptions::joint_jump_every)
+//     and the classes' swap (ModelExtension::stiffness_jump, in both samplers); the MCMC spends
+//     1.8 % of its sweeps in the swapped mode, the SMC seeds 1.6 % and 1.0 % of their weight.
+//   profile_defect 0.086 sd (height), SMC se 0.027 sd, MCMC ESS 521-647 on ψ; pass. SMC 270 s,
+//     MCMC 44 s. Before: ESS 7 on height, 10 on length, along the defect's length-height ridge;
+//     now both samplers walk in (position, log length, height x length^0.8).
+//   speed_bias FAILS the Monte Carlo check, on the SMC's side: its two seeds differ by 0.42 sd on
+//     sigma_kt (pooled SMC se 0.095 sd > 0.083), offset -0.30 sd on sigma_kt, <= 0.10 elsewhere;
+//     SMC 176 s, MCMC 165 s. Seed 1 keeps 10 % of its weight at sigma_kt < 60k, inside the
+//     funnel where every k_t sits at K_t (distinct particles, not copies), where seed 2 keeps
+//     0.7 % and the MCMC, which interweaves (K_t, sigma_kt), 0.8 % (a chain without the joint jumps,
+//     its sigma_kt mean within 0.002 sd of this one's): the latent SMC core has no
+//     move that carries (K_t, sigma_kt) and the k_t's out together.
+//   sensor_gain, suspension_damping, tyre_damping, unsprung_mass: on main (before the joint latent
+//   jumps) 0.05, 0.11, 0.06 and 0.05 sd, MCMC ESS >= 200, SMC se <= 0.03 sd: pass. Their SMC is
+//   unchanged since (identity move coordinates, no stiffness jump); their MCMC now has the joint
+//   jumps. PENDING: not re-measured at this commit (the runs were held up on the shared machine).
 TEST_CASE("the latent SMC and the batch MCMC agree on every extension's posterior within a quarter sd",
           "[fleet][mcmc][smc][extension][long]") {
   constexpr int kTrucks = 50;
@@ -322,76 +330,82 @@ TEST_CASE("the latent SMC and the batch MCMC agree on every extension's posterio
   constexpr int kMcmcIterations = 30000, kMcmcBurnIn = 5000;
   constexpr double kTolerance = 0.25;  // posterior sd
   const auto& site = as1();
-  const auto started = std::chrono::steady_clock::now();
   for (const auto& name : fleet::extension_names()) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const auto data = hidden_effect_log(name, kTrucks, 2024);
-    const auto ext = fleet::make_extension(name, site);
-    const Eigen::Index d = ext->dim();
+    // One section per extension, so one can be run alone: -c speed_bias.
+    DYNAMIC_SECTION(name) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const auto data = hidden_effect_log(name, kTrucks, 2024);
+      const auto ext = fleet::make_extension(name, site);
+      const Eigen::Index d = ext->dim();
 
-    // The SMC, twice (seeds 1, 2): θ and ψ per particle, with the cloud's weights.
-    std::vector<Eigen::MatrixXd> smc_states;  // (7 + d) x P
-    std::vector<Eigen::ArrayXd> smc_weights;
-    for (std::uint64_t seed : {1, 2}) {
-      fleet::FleetSmc::Options o;  // the latent core's defaults (`fit --core latent`, diagnose)
-      o.sampler.particles = kParticles;
-      o.sampler.threads = 2;
-      o.sampler.seed = seed;
+      // The SMC, twice (seeds 1, 2): θ and ψ per particle, with the cloud's weights.
+      std::vector<Eigen::MatrixXd> smc_states;  // (7 + d) x P
+      std::vector<Eigen::ArrayXd> smc_weights;
+      for (std::uint64_t seed : {1, 2}) {
+        fleet::FleetSmc::Options o;  // the latent core's defaults (`fit --core latent`, diagnose)
+        o.sampler.particles = kParticles;
+        o.sampler.threads = 2;
+        o.sampler.seed = seed;
+        o.extension = ext.get();
+        fleet::FleetSmc smc(site, o);
+        for (const auto& r : data.records) smc.absorb(r);
+        smc.rejuvenate(o.sampler.schedule.final_sweeps);
+        const auto cloud = smc.cloud();
+        Eigen::MatrixXd state(fleet::kHyperCount + d, kParticles);
+        state.topRows(fleet::kHyperCount) = cloud.theta;
+        state.bottomRows(d) = smc.target().psi();
+        smc_states.push_back(state);
+        smc_weights.push_back(cloud.weights);
+      }
+      const double smc_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+      fleet::BatchMcmcOptions o;
+      o.iterations = kMcmcIterations;
+      o.burn_in = kMcmcBurnIn;
+      o.seed = 7;
+      o.threads = 2;
       o.extension = ext.get();
-      fleet::FleetSmc smc(site, o);
-      for (const auto& r : data.records) smc.absorb(r);
-      smc.rejuvenate(o.sampler.schedule.final_sweeps);
-      const auto cloud = smc.cloud();
-      Eigen::MatrixXd state(fleet::kHyperCount + d, kParticles);
-      state.topRows(fleet::kHyperCount) = cloud.theta;
-      state.bottomRows(d) = smc.target().psi();
-      smc_states.push_back(state);
-      smc_weights.push_back(cloud.weights);
-    }
-    const double smc_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const auto r = fleet::run_batch_mcmc(site, data.records, o);
+      Eigen::MatrixXd chain(r.theta_draws.rows(), fleet::kHyperCount + d);
+      chain << r.theta_draws, r.psi_draws;
 
-    fleet::BatchMcmcOptions o;
-    o.iterations = kMcmcIterations;
-    o.burn_in = kMcmcBurnIn;
-    o.seed = 7;
-    o.threads = 2;
-    o.extension = ext.get();
-    const auto r = fleet::run_batch_mcmc(site, data.records, o);
-    Eigen::MatrixXd chain(r.theta_draws.rows(), fleet::kHyperCount + d);
-    chain << r.theta_draws, r.psi_draws;
-
-    std::vector<std::string> names(fleet::kHyperNames.begin(), fleet::kHyperNames.end());
-    for (const auto& p : ext->parameters()) names.push_back(name + "." + p.name);
-    const Eigen::Index J = fleet::kHyperCount + d;
-    std::vector<double> offset(J), mcmc_se(J), smc_diff(J), ess(J);
-    double pooled = 0.0;
-    for (Eigen::Index j = 0; j < J; ++j) {
-      const Eigen::VectorXd c = chain.col(j);
-      const double mean = c.mean(), sd = std::sqrt((c.array() - mean).square().mean());
-      const Moments a = weighted_moments(smc_states[0].row(j).transpose(), smc_weights[0]);
-      const Moments b = weighted_moments(smc_states[1].row(j).transpose(), smc_weights[1]);
-      ess[j] = chain_effective_sample_size(c);
-      mcmc_se[j] = 1.0 / std::sqrt(ess[j]);
-      smc_diff[j] = (a.mean - b.mean) / sd;
-      pooled += smc_diff[j] * smc_diff[j];
-      offset[j] = (0.5 * (a.mean + b.mean) - mean) / sd;
-    }
-    const double smc_se = std::sqrt(pooled / static_cast<double>(J)) / 2.0;
-    const double mcmc_seconds = r.wall_seconds;
-    std::ostringstream report;
-    report << name << ": SMC " << smc_seconds << " s (2 runs), MCMC " << mcmc_seconds << " s, psi acceptance "
-           << r.psi_acceptance << ", jump " << r.psi_jump_acceptance << ", SMC se " << smc_se << " sd\n";
-    for (Eigen::Index j = 0; j < J; ++j) {
-      report << "  " << names[static_cast<std::size_t>(j)] << ": offset " << offset[j] << " sd, MCMC ESS " << ess[j]
-             << ", SMC seed difference " << smc_diff[j] << " sd\n";
-    }
-    WARN(report.str());  // the measured offsets and times, for the record
-    for (Eigen::Index j = 0; j < J; ++j) {
-      INFO(report.str() << names[static_cast<std::size_t>(j)]);
-      const double monte_carlo_sd = std::sqrt(mcmc_se[j] * mcmc_se[j] + smc_se * smc_se);
-      CHECK(monte_carlo_sd <= kTolerance / 3.0);
-      CHECK(std::abs(offset[j]) < kTolerance);
+      std::vector<std::string> names(fleet::kHyperNames.begin(), fleet::kHyperNames.end());
+      for (const auto& p : ext->parameters()) names.push_back(name + "." + p.name);
+      const Eigen::Index J = fleet::kHyperCount + d;
+      std::vector<double> offset(J), mcmc_se(J), smc_diff(J), ess(J), smc_mean(J), mcmc_mean(J), mcmc_sd(J);
+      double pooled = 0.0;
+      for (Eigen::Index j = 0; j < J; ++j) {
+        const Eigen::VectorXd c = chain.col(j);
+        const double mean = c.mean(), sd = std::sqrt((c.array() - mean).square().mean());
+        const Moments a = weighted_moments(smc_states[0].row(j).transpose(), smc_weights[0]);
+        const Moments b = weighted_moments(smc_states[1].row(j).transpose(), smc_weights[1]);
+        ess[j] = chain_effective_sample_size(c);
+        mcmc_se[j] = 1.0 / std::sqrt(ess[j]);
+        smc_diff[j] = (a.mean - b.mean) / sd;
+        pooled += smc_diff[j] * smc_diff[j];
+        offset[j] = (0.5 * (a.mean + b.mean) - mean) / sd;
+        smc_mean[j] = 0.5 * (a.mean + b.mean);
+        mcmc_mean[j] = mean;
+        mcmc_sd[j] = sd;
+      }
+      const double smc_se = std::sqrt(pooled / static_cast<double>(J)) / 2.0;
+      const double mcmc_seconds = r.wall_seconds;
+      std::ostringstream report;
+      report << name << ": SMC " << smc_seconds << " s (2 runs), MCMC " << mcmc_seconds << " s (" << kMcmcIterations
+             << " sweeps), psi acceptance " << r.psi_acceptance << ", jump " << r.psi_jump_acceptance
+             << ", joint latent jump " << r.joint_jump_acceptance << ", SMC se " << smc_se << " sd\n";
+      for (Eigen::Index j = 0; j < J; ++j) {
+        report << "  " << names[static_cast<std::size_t>(j)] << ": SMC mean " << smc_mean[j] << ", MCMC mean "
+               << mcmc_mean[j] << " (sd " << mcmc_sd[j] << "), offset " << offset[j] << " sd, MCMC ESS " << ess[j]
+               << ", SMC seed difference " << smc_diff[j] << " sd\n";
+      }
+      WARN(report.str());  // the measured offsets and times, for the record
+      for (Eigen::Index j = 0; j < J; ++j) {
+        INFO(report.str() << names[static_cast<std::size_t>(j)]);
+        const double monte_carlo_sd = std::sqrt(mcmc_se[j] * mcmc_se[j] + smc_se * smc_se);
+        CHECK(monte_carlo_sd <= kTolerance / 3.0);
+        CHECK(std::abs(offset[j]) < kTolerance);
+      }
     }
   }
-  WARN("all extensions: " << std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() << " s");
 }

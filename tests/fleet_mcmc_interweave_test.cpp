@@ -228,8 +228,10 @@ TEST_CASE("batch MCMC draws are bit-identical at 1 and 2 threads, interweaving o
     // Interweaving re-simulates all 40 trucks per ancillary step: 3 blocks x 1 step per sweep
     // once theta is free.
     const long long ancillary = interweave ? 3LL * 40 * (300 - 20) : 0;
-    // Lateral jumps: all 40 trucks on every lateral_jump_every-th sweep.
-    const long long jumps = 40LL * ((300 + o.lateral_jump_every - 1) / o.lateral_jump_every);
+    // Lateral jumps: all 40 trucks on every lateral_jump_every-th sweep; joint jumps: at most all 40
+    // (a proposal with k or k_t <= 0 is not simulated) on every joint_jump_every-th.
+    const long long jumps = 40LL * ((300 + o.lateral_jump_every - 1) / o.lateral_jump_every) +
+                            40LL * ((300 + o.joint_jump_every - 1) / o.joint_jump_every);
     CHECK(one.integrator_passes <= 40LL * 51 + 40LL * 300 + ancillary + jumps);
     if (interweave) {
       CHECK(one.ancillary_k_acceptance > 0.0);

@@ -445,12 +445,14 @@ TEST_CASE("batch MCMC on 30 simulated trucks brackets the true K and Kt and Z an
   CHECK(r.latent_acceptance > 0.15);
   CHECK(r.latent_acceptance < 0.5);
   // One batched pass per sweep plus the grid search (51 lateral positions per truck), plus one per
-  // lateral-jump sweep and one per ancillary step of each interwoven block once theta is free.
+  // lateral-jump sweep, at most one per joint-jump sweep and one per ancillary step of each
+  // interwoven block once theta is free.
   const long long interwoven_blocks =
       o.interweave
           ? int{o.interweave_stiffness} + int{o.interweave_tyre_stiffness} + int{o.interweave_lateral}
           : 0;
   CHECK(r.integrator_passes <= 30LL * 51 + 30LL * 6000 + 30LL * ((6000 + o.lateral_jump_every - 1) / o.lateral_jump_every) +
+                                   30LL * ((6000 + o.joint_jump_every - 1) / o.joint_jump_every) +
                                    interwoven_blocks * o.ancillary_steps * 30LL *
                                        ((6000 - o.hold_theta_sweeps) / o.ancillary_every + 1));
   CHECK(r.integrator_calls >= 6000);
@@ -515,6 +517,7 @@ TEST_CASE("lateral jumps let the batch MCMC cross between lateral modes on AS2",
     o.seed = 7;
     o.threads = 2;
     o.lateral_jump_every = jump_every;
+    o.joint_jump_every = 0;  // the joint jumps cross lateral modes too: this test is about the lateral ones
     const auto r = fleet::run_batch_mcmc(site, log.records, o);
     const Eigen::VectorXd c = r.theta_draws.col(fleet::kSigmaZ);
     const double mean = c.mean(), sd = std::sqrt((c.array() - mean).square().mean());

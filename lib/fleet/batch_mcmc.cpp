@@ -16,6 +16,7 @@
 
 #include "fleet/batch_mcmc_extension.hpp"
 #include "fleet/batch_mcmc_interweave.hpp"
+#include "fleet/batch_mcmc_jumps.hpp"
 #include "fleet/batch_mcmc_residuals.hpp"
 #include "fleet/batch_mcmc_start.hpp"
 #include "model/extension_conditionals.hpp"
@@ -31,6 +32,8 @@ using detail::ChainStart;
 using detail::choose_psi_start;
 using detail::ExtensionSteps;
 using detail::gather;
+using detail::JumpCounts;
+using detail::LatentJumps;
 using detail::Observations;
 using detail::ResidualEvaluator;
 using detail::start_chain;
@@ -171,8 +174,8 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
   std::vector<int> valid;
   valid.reserve(static_cast<std::size_t>(N));
   Eigen::ArrayXd k_prop, kt_prop, z_prop, ssr_prop;
-  Eigen::ArrayXd k_jump(N), kt_jump(N), z_jump(N), ssr_jump(N);
-  long long lateral_jumps_accepted = 0, lateral_jumps_tried = 0;
+  LatentJumps jumps(extension, range);
+  JumpCounts lateral_jump_counts, joint_jump_counts;
 
   // Interweaving: one ancillary updater per interwoven block, and the SSR of every truck with
   // one latent coordinate replaced (the other two at their current values).
@@ -259,25 +262,12 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
       }
       sweep_acc = accept_prob.mean();
 
-      // Lateral jumps: z' from the prior on the road, (k, k_t) kept; the prior cancels against the
-      // proposal, so the likelihood ratio decides.
+      // Independence jumps from the fleet distribution (batch_mcmc_jumps.hpp): z alone, then (k, k_t, z).
       if (options.lateral_jump_every > 0 && it % options.lateral_jump_every == 0) {
-        for (int n = 0; n < N; ++n) {
-          k_jump[n] = x(n, kStiffness);
-          kt_jump[n] = x(n, kTyreStiffness);
-          z_jump[n] = draw_truncated_normal(engine, theta[kZ], theta[kSigmaZ], range.lo_m, range.hi_m);
-        }
-        evaluator.evaluate(all, k_jump, kt_jump, z_jump, psi_now(), ssr_jump);
-        const double inv2var = 0.5 / (theta[kSigmaIf] * theta[kSigmaIf]);
-        for (int n = 0; n < N; ++n) {
-          const double log_alpha = -(ssr_jump[n] - ssr[n]) * inv2var;
-          if (log_uniform(engine) < log_alpha) {
-            x(n, kLateral) = z_jump[n];
-            ssr[n] = ssr_jump[n];
-            if (!burning_in) ++lateral_jumps_accepted;
-          }
-        }
-        if (!burning_in) lateral_jumps_tried += N;
+        jumps.lateral(engine, theta, psi_now(), x, ssr, evaluator, all, !burning_in, lateral_jump_counts);
+      }
+      if (options.joint_jump_every > 0 && it % options.joint_jump_every == 0) {
+        jumps.joint(engine, theta, psi_now(), x, ssr, evaluator, !burning_in, joint_jump_counts);
       }
 
       // Adaptation (burn-in only): Robbins-Monro on each truck's log scale towards the target
@@ -334,7 +324,7 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
       const bool ancillary_sweep = interweave && it % options.ancillary_every == 0;
       if (stiffness_edited) {
         // No conjugate step under an extension's stiffness distribution: MH on its conditional.
-        extension_steps->stiffness_steps(engine, theta, x, burning_in, collect);
+        extension_steps->stiffness_steps(engine, it, theta, x, burning_in, collect);
       } else {
         mean_and_scale(x.col(kStiffness), kK, kSigmaK, sk_acc, sk_try);
       }
@@ -457,8 +447,8 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
   result.ancillary_k_acceptance = rate(ancillary_k);
   result.ancillary_kt_acceptance = rate(ancillary_kt);
   result.ancillary_z_acceptance = rate(ancillary_z);
-  result.lateral_jump_acceptance =
-      lateral_jumps_tried > 0 ? static_cast<double>(lateral_jumps_accepted) / static_cast<double>(lateral_jumps_tried) : 0.0;
+  result.lateral_jump_acceptance = lateral_jump_counts.rate();
+  result.joint_jump_acceptance = joint_jump_counts.rate();
   result.latent_mean.resize(N, kLatentCount);
   result.latent_sd.resize(N, kLatentCount);
   for (int n = 0; n < N; ++n) {

@@ -62,11 +62,21 @@ void AdaptiveWalk::adapt(double accept_prob, bool collect, const Eigen::VectorXd
 }
 
 namespace {
+// The walk's first step per coordinate of ψ's move coordinates (ModelExtension::to_move_coordinates):
+// `fraction` of how far that coordinate moves across ψ_j's box with the others at their null values
+// (for ψ itself, of the box's width).
 Eigen::VectorXd psi_initial_sd(const ModelExtension& extension, double fraction) {
+  const auto& params = extension.parameters();
+  std::vector<double> psi(params.size()), u_lo(params.size()), u_hi(params.size());
+  for (std::size_t j = 0; j < params.size(); ++j) psi[j] = params[j].null_value;
   Eigen::VectorXd sd(extension.dim());
-  for (Eigen::Index j = 0; j < sd.size(); ++j) {
-    const auto& p = extension.parameters()[static_cast<std::size_t>(j)];
-    sd[j] = fraction * (p.hi - p.lo);
+  for (std::size_t j = 0; j < params.size(); ++j) {
+    std::vector<double> at = psi;
+    at[j] = params[j].lo;
+    extension.to_move_coordinates(at.data(), u_lo.data());
+    at[j] = params[j].hi;
+    extension.to_move_coordinates(at.data(), u_hi.data());
+    sd[static_cast<Eigen::Index>(j)] = fraction * std::abs(u_hi[j] - u_lo[j]);
   }
   return sd;
 }
@@ -167,8 +177,8 @@ ExtensionSteps::ExtensionSteps(const ModelExtension& extension, std::vector<doub
       stiffness_walk_(stiffness_initial_sd(extension, psi_with_stiffness_, options.psi_initial_step, theta0, trucks),
                       options.target_acceptance) {}
 
-void ExtensionSteps::stiffness_steps(McmcEngine& engine, HyperVector& theta, const Eigen::MatrixXd& latents,
-                                     bool burning_in, bool collect) {
+void ExtensionSteps::stiffness_steps(McmcEngine& engine, int sweep, HyperVector& theta,
+                                     const Eigen::MatrixXd& latents, bool burning_in, bool collect) {
   const Eigen::Index n = latents.rows(), d_psi = psi_with_stiffness_ ? extension_.dim() : 0;
   const double* k = latents.col(kStiffness).data();
   Eigen::VectorXd x(2 + d_psi);
@@ -180,6 +190,21 @@ void ExtensionSteps::stiffness_steps(McmcEngine& engine, HyperVector& theta, con
                                      1, options_.prior);
   };
   double current = log_density(x);
+  // The extension's jump of (K, σ_k, ψ) (second_class: the classes trade places), before the walk.
+  if (psi_with_stiffness_ && extension_.stiffness_jump_draws() > 0 && options_.psi_jump_every > 0 &&
+      sweep % options_.psi_jump_every == 0) {
+    std::vector<double> u(static_cast<std::size_t>(extension_.stiffness_jump_draws()));
+    for (double& v : u) v = uniform_open01(engine);
+    Eigen::VectorXd y(x.size());
+    extension_.stiffness_jump(x.data() + 2, x[0], x[1], u.data(), y.data() + 2, &y[0], &y[1]);
+    const double candidate = log_density(y);
+    if (std::isfinite(candidate) && std::log(uniform_open01(engine)) < candidate - current) {
+      x = y;
+      current = candidate;
+      if (!burning_in) ++jump_accepted_;
+    }
+    if (!burning_in) ++jump_tried_;
+  }
   for (int s = 0; s < options_.stiffness_moves_per_sweep; ++s) {
     const Eigen::VectorXd y = stiffness_walk_.propose(engine, x);
     const double candidate = log_density(y);
@@ -201,9 +226,9 @@ void ExtensionSteps::stiffness_steps(McmcEngine& engine, HyperVector& theta, con
   for (Eigen::Index j = 0; j < d_psi; ++j) psi_[static_cast<std::size_t>(j)] = x[2 + j];
 }
 
-double ExtensionSteps::try_psi(McmcEngine& engine, const std::vector<double>& proposal, const HyperVector& theta,
-                               const Eigen::MatrixXd& latents, Eigen::ArrayXd& ssr, ResidualEvaluator& evaluator,
-                               const std::vector<int>& all, long long& accepted) {
+double ExtensionSteps::try_psi(McmcEngine& engine, const std::vector<double>& proposal, double log_jacobian_ratio,
+                               const HyperVector& theta, const Eigen::MatrixXd& latents, Eigen::ArrayXd& ssr,
+                               ResidualEvaluator& evaluator, const std::vector<int>& all, long long& accepted) {
   if (!extension_.in_prior(proposal.data())) return 0.0;
   const bool forward = extension_.edits_forward();
   const double ssr_now = ssr.sum();
@@ -216,7 +241,8 @@ double ExtensionSteps::try_psi(McmcEngine& engine, const std::vector<double>& pr
   }
   const double log_alpha =
       log_psi_ratio(extension_, proposal.data(), psi_.data(), ssr_new, ssr_now, theta[kSigmaIf],
-                    latents.col(kStiffness).data(), latents.rows(), 1, theta[kK], theta[kSigmaK]);
+                    latents.col(kStiffness).data(), latents.rows(), 1, theta[kK], theta[kSigmaK]) +
+      log_jacobian_ratio;
   const double accept_prob = std::isfinite(log_alpha) ? std::min(1.0, std::exp(log_alpha)) : 0.0;
   if (std::log(uniform_open01(engine)) < log_alpha) {
     psi_ = proposal;
@@ -234,19 +260,30 @@ void ExtensionSteps::psi_steps(McmcEngine& engine, int sweep, const HyperVector&
     std::vector<double> u(static_cast<std::size_t>(extension_.jump_draws())), proposal(psi_.size());
     for (double& v : u) v = uniform_open01(engine);
     extension_.jump(psi_.data(), u.data(), proposal.data());
-    try_psi(engine, proposal, theta, latents, ssr, evaluator, all, burning_in ? discard : jump_accepted_);
+    try_psi(engine, proposal, 0.0, theta, latents, ssr, evaluator, all, burning_in ? discard : jump_accepted_);
     if (!burning_in) ++jump_tried_;
   }
   if (psi_with_stiffness_) return;  // ψ moved with (K, σ_k) in stiffness_steps
+  // The walk steps in the extension's move coordinates u (the identity unless it defines them):
+  // its target there is π(ψ(u)) |det ∂ψ/∂u|, hence the Jacobian ratio.
   const Eigen::Index d = extension_.dim();
+  Eigen::VectorXd x(d);
+  std::vector<double> proposal(static_cast<std::size_t>(d));
   for (int s = 0; s < options_.psi_moves_per_sweep; ++s) {
-    const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(psi_.data(), d);
+    extension_.to_move_coordinates(psi_.data(), x.data());
     const Eigen::VectorXd y = psi_walk_.propose(engine, x);
-    const std::vector<double> proposal(y.data(), y.data() + d);
-    const double accept_prob =
-        try_psi(engine, proposal, theta, latents, ssr, evaluator, all, burning_in ? discard : walk_accepted_);
+    extension_.from_move_coordinates(y.data(), proposal.data());
+    const double log_jacobian_ratio =
+        extension_.in_prior(proposal.data())
+            ? extension_.log_move_jacobian(proposal.data()) - extension_.log_move_jacobian(psi_.data())
+            : 0.0;
+    const double accept_prob = try_psi(engine, proposal, log_jacobian_ratio, theta, latents, ssr, evaluator, all,
+                                       burning_in ? discard : walk_accepted_);
     if (!burning_in) ++walk_tried_;
-    if (burning_in) psi_walk_.adapt(accept_prob, collect, Eigen::Map<const Eigen::VectorXd>(psi_.data(), d));
+    if (burning_in) {
+      extension_.to_move_coordinates(psi_.data(), x.data());
+      psi_walk_.adapt(accept_prob, collect, x);
+    }
   }
 }
 

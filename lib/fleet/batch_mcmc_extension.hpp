@@ -4,6 +4,9 @@
 // (model/extension_conditionals.hpp); the residuals come through the same extended forward model
 // (ResidualEvaluator → model/extended_forward.hpp). Internal to the sampler (namespace detail).
 //
+// ψ's random walk steps in the extension's move coordinates (ModelExtension::to_move_coordinates;
+// profile_defect's straighten its length-height ridge), with their Jacobian in the MH ratio.
+//
 // Which block moves what (as FleetTarget's moves "extension jump", "extension random walk" and
 // "stiffness distribution"):
 //   - an extension that edits the forward model: ψ by the jump (if it has one) and the walk, each
@@ -80,9 +83,11 @@ class ExtensionSteps {
   // True when (K, σ_k) move in stiffness_steps instead of their Gibbs step.
   bool moves_stiffness() const { return extension_.edits_stiffness_distribution(); }
 
-  // stiffness_moves_per_sweep MH steps of (K, σ_k[, ψ]) given every truck's k (latents: trucks x 3).
-  void stiffness_steps(McmcEngine& engine, HyperVector& theta, const Eigen::MatrixXd& latents, bool burning_in,
-                       bool collect);
+  // stiffness_moves_per_sweep MH steps of (K, σ_k[, ψ]) given every truck's k (latents: trucks x 3),
+  // after, on sweeps it % psi_jump_every == 0, the extension's stiffness jump if ψ moves here and
+  // it has one (counted as the jump's acceptance).
+  void stiffness_steps(McmcEngine& engine, int sweep, HyperVector& theta, const Eigen::MatrixXd& latents,
+                       bool burning_in, bool collect);
   // The jump (on sweeps it % psi_jump_every == 0, if the extension has one), then psi_moves_per_sweep
   // random-walk steps (unless ψ moves in stiffness_steps). ssr (per truck, at the current ψ) follows
   // an accepted ψ. all: every truck's index.
@@ -95,10 +100,11 @@ class ExtensionSteps {
   double stiffness_acceptance() const;
 
  private:
-  // One MH step of ψ to `proposal` given θ and the latents; returns min(1, α) (0 outside the box).
-  double try_psi(McmcEngine& engine, const std::vector<double>& proposal, const HyperVector& theta,
-                 const Eigen::MatrixXd& latents, Eigen::ArrayXd& ssr, ResidualEvaluator& evaluator,
-                 const std::vector<int>& all, long long& accepted);
+  // One MH step of ψ to `proposal` given θ and the latents, the proposal's log density ratio
+  // (reverse over forward; a move-coordinate Jacobian) added; returns min(1, α) (0 outside the box).
+  double try_psi(McmcEngine& engine, const std::vector<double>& proposal, double log_jacobian_ratio,
+                 const HyperVector& theta, const Eigen::MatrixXd& latents, Eigen::ArrayXd& ssr,
+                 ResidualEvaluator& evaluator, const std::vector<int>& all, long long& accepted);
 
   const ModelExtension& extension_;
   const BatchMcmcOptions& options_;

@@ -69,6 +69,7 @@ bool BatchMcmcOptions::IsValid(std::string* error) const {
   SSRFLEET_OPTION_CHECK(ancillary_steps >= 1, "ancillary_steps", ancillary_steps, ">= 1");
   SSRFLEET_OPTION_CHECK(ancillary_every >= 1, "ancillary_every", ancillary_every, ">= 1");
   SSRFLEET_OPTION_CHECK(lateral_jump_every >= 0, "lateral_jump_every", lateral_jump_every, ">= 0");
+  SSRFLEET_OPTION_CHECK(joint_jump_every >= 0, "joint_jump_every", joint_jump_every, ">= 0 (0 = no joint jumps)");
   SSRFLEET_OPTION_CHECK(threads >= 0, "threads", threads, ">= 0 (0 = all hardware threads)");
   SSRFLEET_OPTION_CHECK(psi_moves_per_sweep >= 1, "psi_moves_per_sweep", psi_moves_per_sweep, ">= 1");
   SSRFLEET_OPTION_CHECK(psi_jump_every >= 0, "psi_jump_every", psi_jump_every, ">= 0 (0 = no jumps)");

@@ -240,14 +240,27 @@ void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::Par
 void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel, PsiMove move) {
   const Eigen::Index P = options_.particles, n = kept_trucks(), d = psi_.rows();
   const ModelExtension& ext = *options_.extension;
-  // Proposal: the cloud's spread of ψ (equal weights), 2.38/√d, times a multiplier adapted on
-  // acceptance; a ridge of 1e-4 of each prior width keeps a collapsed coordinate movable.
-  const Eigen::VectorXd mean = psi_.rowwise().mean();
-  const Eigen::MatrixXd centred = psi_.colwise() - mean;
+  // Proposal: a random walk in the extension's move coordinates u (ModelExtension::
+  // to_move_coordinates; ψ itself unless it defines them), on the cloud's spread of u (equal
+  // weights), 2.38/√d, times a multiplier adapted on acceptance; a ridge of 1e-4 of how far each
+  // coordinate moves across its box keeps a collapsed coordinate movable.
+  Eigen::MatrixXd u(d, P);
+  for (Eigen::Index i = 0; i < P; ++i) ext.to_move_coordinates(psi_.col(i).data(), u.col(i).data());
+  const Eigen::VectorXd mean = u.rowwise().mean();
+  const Eigen::MatrixXd centred = u.colwise() - mean;
   Eigen::MatrixXd cov = centred * centred.transpose() / static_cast<double>(P);
-  for (Eigen::Index j = 0; j < d; ++j) {
-    const auto& p = ext.parameters()[static_cast<std::size_t>(j)];
-    cov(j, j) += std::pow(1e-4 * (p.hi - p.lo), 2);
+  {
+    std::vector<double> at(static_cast<std::size_t>(d)), u_lo(at.size()), u_hi(at.size());
+    for (Eigen::Index j = 0; j < d; ++j) at[static_cast<std::size_t>(j)] = ext.parameters()[static_cast<std::size_t>(j)].null_value;
+    for (Eigen::Index j = 0; j < d; ++j) {
+      const auto& p = ext.parameters()[static_cast<std::size_t>(j)];
+      std::vector<double> edge = at;
+      edge[static_cast<std::size_t>(j)] = p.lo;
+      ext.to_move_coordinates(edge.data(), u_lo.data());
+      edge[static_cast<std::size_t>(j)] = p.hi;
+      ext.to_move_coordinates(edge.data(), u_hi.data());
+      cov(j, j) += std::pow(1e-4 * std::abs(u_hi[static_cast<std::size_t>(j)] - u_lo[static_cast<std::size_t>(j)]), 2);
+    }
   }
   Eigen::MatrixXd chol = Eigen::LLT<Eigen::MatrixXd>(cov).matrixL();
   chol *= extension_scale_ * 2.38 / std::sqrt(static_cast<double>(d));
@@ -263,7 +276,8 @@ void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::Parall
     } else {
       Eigen::VectorXd z(d);
       for (Eigen::Index j = 0; j < d; ++j) z[j] = standard_normal(rng);
-      proposals.col(i) = psi_.col(i) + chol * z;
+      const Eigen::VectorXd v = u.col(i) + chol * z;
+      ext.from_move_coordinates(v.data(), proposals.col(i).data());
     }
     log_u[i] = std::log(uniform_open01(rng));
     inside[static_cast<std::size_t>(i)] = ext.in_prior(proposals.col(i).data()) ? 1 : 0;
@@ -289,9 +303,14 @@ void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::Parall
     const double s_new = new_ssr.col(i).sum(), s_old = ssr_.col(i).sum();
     if (!std::isfinite(s_new)) continue;
     // With an extension's stiffness distribution ψ also changes the density of every kept truck's k.
+    // A walk in u targets π(ψ(u)) |det ∂ψ/∂u|: its ratio gains the Jacobian's (the jump is in ψ).
+    const double log_jacobian_ratio =
+        move == PsiMove::kJump ? 0.0
+                               : ext.log_move_jacobian(proposals.col(i).data()) - ext.log_move_jacobian(psi_.col(i).data());
     const double log_ratio =
         log_psi_ratio(ext, proposals.col(i).data(), psi_.col(i).data(), s_new, s_old, theta_(kSigmaIf, i),
-                      latents_.col(i).data() + kStiffness, n, 3, theta_(kK, i), theta_(kSigmaK, i));
+                      latents_.col(i).data() + kStiffness, n, 3, theta_(kK, i), theta_(kSigmaK, i)) +
+        log_jacobian_ratio;
     if (log_u[i] < log_ratio) {
       psi_.col(i) = proposals.col(i);
       ssr_.col(i) = new_ssr.col(i);
@@ -326,13 +345,27 @@ void FleetTarget::stiffness_distribution_sweep(const smc::RngFactory& rngs, cons
     const double* psi = with_psi ? x.data() + 2 : psi_.col(i).data();
     return log_stiffness_conditional(ext, x[0], x[1], psi, latents_.col(i).data() + kStiffness, n, 3, prior);
   };
-  std::vector<int> moved(static_cast<std::size_t>(P), 0);
+  // The extension's jump of (K, σ_k, ψ) (second_class: the classes trade places), once per call
+  // before the walk: the walk, scaled on the cloud, does not cross between such modes.
+  const bool jump = with_psi && ext.stiffness_jump_draws() > 0;
+  std::vector<int> moved(static_cast<std::size_t>(P), 0), jumped(static_cast<std::size_t>(P), 0);
   parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
-    Eigen::VectorXd z(d);
+    Eigen::VectorXd z(d), y(d);
+    std::vector<double> u(static_cast<std::size_t>(ext.stiffness_jump_draws()));
     for (Eigen::Index i = begin; i < end; ++i) {
       smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
       Eigen::VectorXd x = state.col(i);
       double lp = log_density(i, x);
+      if (jump) {
+        for (double& v : u) v = smc::uniform01(rng);
+        ext.stiffness_jump(x.data() + 2, x[0], x[1], u.data(), y.data() + 2, &y[0], &y[1]);
+        const double lp_new = log_density(i, y);
+        if (std::log(uniform_open01(rng)) < lp_new - lp) {
+          x = y;
+          lp = lp_new;
+          jumped[static_cast<std::size_t>(i)] = 1;
+        }
+      }
       for (int step = 0; step < kStiffnessSteps; ++step) {
         for (Eigen::Index j = 0; j < d; ++j) z[j] = standard_normal(rng);
         const Eigen::VectorXd y = x + chol * z;
@@ -352,6 +385,10 @@ void FleetTarget::stiffness_distribution_sweep(const smc::RngFactory& rngs, cons
   double total = 0.0;
   for (int m : moved) total += m;
   stiffness_acceptance_ = total / static_cast<double>(P * kStiffnessSteps);
+  if (jump) {
+    extension_jump_acceptance_ =
+        static_cast<double>(std::count(jumped.begin(), jumped.end(), 1)) / static_cast<double>(P);
+  }
   stiffness_scale_ = smc::tuned_scale_factor(stiffness_scale_, stiffness_acceptance_);
 }
 

@@ -33,6 +33,14 @@ inline double log_stiffness_density(const ModelExtension* extension, const doubl
                                     : log_normal_density(stiffness_npm, mean_npm, sd_npm);
 }
 
+// A truck's k drawn from p(k | K, σ_k, ψ) from a uniform on [0, 1) and an independent standard
+// normal: the base model's K + σ_k ε (the uniform unused), or the extension's draw.
+inline double draw_stiffness(const ModelExtension* extension, const double* psi, double mean_npm, double sd_npm,
+                             double uniform, double standard_normal) {
+  return edits_stiffness(extension) ? extension->draw_stiffness(psi, mean_npm, sd_npm, uniform, standard_normal)
+                                    : mean_npm + sd_npm * standard_normal;
+}
+
 // log p(k, k_t, z | θ, ψ) of one truck: the base model's density, with the extension's stiffness
 // density for the k factor when it has one. Without one (or a null extension) it is exactly
 // log_latent_density; with one at its null ψ it is too, whenever the extension's density returns

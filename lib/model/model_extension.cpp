@@ -44,6 +44,14 @@ double ModelExtension::log_prior(const double* psi) const {
   return lp;
 }
 
+void ModelExtension::to_move_coordinates(const double* psi, double* u) const {
+  std::copy(psi, psi + dim(), u);
+}
+
+void ModelExtension::from_move_coordinates(const double* u, double* psi) const {
+  std::copy(u, u + dim(), psi);
+}
+
 double ModelExtension::log_stiffness_density(const double* /*psi*/, double k, double mean_npm, double sd_npm) const {
   return log_normal_density(k, mean_npm, sd_npm);
 }

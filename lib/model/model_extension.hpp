@@ -114,6 +114,24 @@ class ModelExtension {
   virtual int jump_draws() const { return 0; }  // 0: no jump
   virtual void jump(const double* /*psi*/, const double* /*u*/, double* /*psi_out*/) const {}
 
+  // Optional, for an extension that replaces the stiffness distribution and does not edit the
+  // forward model: a jump of (K, σ_k, ψ) together between distant modes of their conditional
+  // (log_stiffness_conditional), e.g. the two classes of a mixture trading places. `u` holds
+  // stiffness_jump_draws() uniforms on [0, 1); the proposal must be symmetric (it may leave a box;
+  // such proposals are rejected). Both samplers run it with their "stiffness distribution" steps.
+  virtual int stiffness_jump_draws() const { return 0; }  // 0: no jump
+  virtual void stiffness_jump(const double* /*psi*/, double /*mean_npm*/, double /*sd_npm*/, const double* /*u*/,
+                              double* /*psi_out*/, double* /*mean_out*/, double* /*sd_out*/) const {}
+
+  // Optional: the coordinates u = g(ψ) in which both samplers' random walks on ψ step (a smooth
+  // bijection of the box's interior; ψ stays what users see in reports and settings). A posterior
+  // ridge that is curved in ψ but straight in u is then followed by a walk whose covariance is
+  // fitted to the chain or the cloud. The default is ψ itself. A walk in u targets
+  // π(ψ(u)) |det ∂ψ/∂u|, so its MH ratio gains log_move_jacobian(ψ') - log_move_jacobian(ψ).
+  virtual void to_move_coordinates(const double* psi, double* u) const;
+  virtual void from_move_coordinates(const double* u, double* psi) const;
+  virtual double log_move_jacobian(const double* /*psi*/) const { return 0.0; }  // log |det ∂ψ/∂u|
+
   Eigen::Index dim() const { return static_cast<Eigen::Index>(parameters().size()); }
   bool in_prior(const double* psi) const;
   // The uniform prior's log density (the normalised box), -inf outside.

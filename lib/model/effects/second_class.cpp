@@ -50,6 +50,20 @@ class SecondClass final : public ModelExtension {
                         double standard_normal) const override {
     return uniform < psi[kShare] ? psi[kMean2] + psi[kSd2] * standard_normal : mean_npm + sd_npm * standard_normal;
   }
+  // The classes trade places: (K, σ_k) <-> (K2, σ_k2), with the share drawn afresh from its box
+  // (symmetric: the reverse trade draws the old share with the same density). The box w <= 0.5
+  // makes the label-swapped fit a distinct mode, the stiff class the broad majority at a share
+  // near 0.5, which the random walk cannot leave for the other (50 trucks, 17 of them stiff: one
+  // of two latent SMC runs kept 10 % of its weight there, K 538k against 497k).
+  int stiffness_jump_draws() const override { return 1; }
+  void stiffness_jump(const double* psi, double mean_npm, double sd_npm, const double* u, double* psi_out,
+                      double* mean_out, double* sd_out) const override {
+    psi_out[kShare] = params_[kShare].lo + (params_[kShare].hi - params_[kShare].lo) * u[0];
+    psi_out[kMean2] = mean_npm;
+    psi_out[kSd2] = sd_npm;
+    *mean_out = psi[kMean2];
+    *sd_out = psi[kSd2];
+  }
   void edit_simulated_truck(const double* psi, records::Truck& truck, double uniform, double standard_normal) const override {
     if (uniform >= psi[kShare]) return;
     // A non-physical draw (possible only when σ_k2 is a large part of K2) keeps the base class's k.
