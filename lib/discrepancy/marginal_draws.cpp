@@ -17,16 +17,13 @@ namespace {
 
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 
-// log p(y | x, σ) + log p(x | θ) up to a constant shared by every x of the truck: the exact target
-// of the MH correction, from the IFs of one integrator pass at x.
+// log p(y | x, σ) + log p(x | θ), the fleet model's densities: the exact target of the MH
+// correction, from the IFs of one integrator pass at x.
 double log_target(const Eigen::Ref<const Eigen::VectorXd>& observed, const Eigen::Ref<const Eigen::ArrayXd>& model_if,
-                  const model::TruckLatent& x, const fleet::HyperVector& theta) {
-  using namespace fleet;
-  const double sigma = theta[kSigmaIf];
+                  const model::TruckLatent& x, const fleet::HyperVector& theta, const fleet::LateralRange& range) {
   const double ssr = (observed.array() - model_if).square().sum();
-  return -0.5 * ssr / (sigma * sigma) + log_normal_density(x.stiffness_npm, theta[kK], theta[kSigmaK]) +
-         log_normal_density(x.tyre_stiffness_npm, theta[kKt], theta[kSigmaKt]) +
-         log_normal_density(x.lateral_m, theta[kZ], theta[kSigmaZ]);
+  return fleet::log_likelihood_from_ssr(ssr, static_cast<int>(observed.size()), theta[fleet::kSigmaIf]) +
+         fleet::log_latent_density(x.stiffness_npm, x.tyre_stiffness_npm, x.lateral_m, theta, range);
 }
 
 }  // namespace
@@ -37,6 +34,7 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
   const auto n = static_cast<Eigen::Index>(target.trucks());
   const int M = site.sensors();
   const double lo = site.lateral_min_m(), hi = site.lateral_max_m();
+  const fleet::LateralRange range{lo, hi};
   std::vector<smc::Rng> rng;
   std::vector<model::TableProposal> proposal;
   rng.reserve(static_cast<std::size_t>(n));
@@ -82,7 +80,7 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
       const auto t = static_cast<std::size_t>(i);
       if (step > 0) ++proposals;
       if (!admissible[t]) continue;
-      const double lp = log_target(target.observed_if()[t], g.col(i), y[t], theta);
+      const double lp = log_target(target.observed_if()[t], g.col(i), y[t], theta, range);
       const double lq = proposal[t].log_density(y[t]);
       bool take = step == 0;
       if (!take) {

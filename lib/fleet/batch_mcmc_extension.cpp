@@ -66,18 +66,9 @@ namespace {
 // `fraction` of how far that coordinate moves across ψ_j's box with the others at their null values
 // (for ψ itself, of the box's width).
 Eigen::VectorXd psi_initial_sd(const ModelExtension& extension, double fraction) {
-  const auto& params = extension.parameters();
-  std::vector<double> psi(params.size()), u_lo(params.size()), u_hi(params.size());
-  for (std::size_t j = 0; j < params.size(); ++j) psi[j] = params[j].null_value;
+  const std::vector<double> spans = extension.move_coordinate_spans();
   Eigen::VectorXd sd(extension.dim());
-  for (std::size_t j = 0; j < params.size(); ++j) {
-    std::vector<double> at = psi;
-    at[j] = params[j].lo;
-    extension.to_move_coordinates(at.data(), u_lo.data());
-    at[j] = params[j].hi;
-    extension.to_move_coordinates(at.data(), u_hi.data());
-    sd[static_cast<Eigen::Index>(j)] = fraction * std::abs(u_hi[j] - u_lo[j]);
-  }
+  for (Eigen::Index j = 0; j < sd.size(); ++j) sd[j] = fraction * spans[static_cast<std::size_t>(j)];
   return sd;
 }
 

@@ -249,19 +249,8 @@ void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::Parall
   const Eigen::VectorXd mean = u.rowwise().mean();
   const Eigen::MatrixXd centred = u.colwise() - mean;
   Eigen::MatrixXd cov = centred * centred.transpose() / static_cast<double>(P);
-  {
-    std::vector<double> at(static_cast<std::size_t>(d)), u_lo(at.size()), u_hi(at.size());
-    for (Eigen::Index j = 0; j < d; ++j) at[static_cast<std::size_t>(j)] = ext.parameters()[static_cast<std::size_t>(j)].null_value;
-    for (Eigen::Index j = 0; j < d; ++j) {
-      const auto& p = ext.parameters()[static_cast<std::size_t>(j)];
-      std::vector<double> edge = at;
-      edge[static_cast<std::size_t>(j)] = p.lo;
-      ext.to_move_coordinates(edge.data(), u_lo.data());
-      edge[static_cast<std::size_t>(j)] = p.hi;
-      ext.to_move_coordinates(edge.data(), u_hi.data());
-      cov(j, j) += std::pow(1e-4 * std::abs(u_hi[static_cast<std::size_t>(j)] - u_lo[static_cast<std::size_t>(j)]), 2);
-    }
-  }
+  const std::vector<double> spans = ext.move_coordinate_spans();
+  for (Eigen::Index j = 0; j < d; ++j) cov(j, j) += std::pow(1e-4 * spans[static_cast<std::size_t>(j)], 2);
   Eigen::MatrixXd chol = Eigen::LLT<Eigen::MatrixXd>(cov).matrixL();
   chol *= extension_scale_ * 2.38 / std::sqrt(static_cast<double>(d));
   Eigen::MatrixXd proposals(d, P);

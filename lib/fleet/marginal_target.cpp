@@ -96,12 +96,8 @@ HyperVector MarginalTarget::theta_of(Eigen::Index p) const {
 double MarginalTarget::sum_loglik(const model::TableStore& store, const model::FleetMarginal& marginal,
                                   std::size_t end, const HyperVector& theta) const {
   const model::ThetaTerms terms = marginal.prepare(theta);
-  if (!terms.inside) return kNegInf;
-  double s = 0.0;
-  for (std::size_t i = 0; i < end; ++i) {
-    s += marginal.log_likelihood(store.view(i), terms);
-    if (s == kNegInf) return s;
-  }
+  double s = kNegInf;
+  marginal.sum_log_likelihood(store, end, &terms, 1, &s);
   return s;
 }
 

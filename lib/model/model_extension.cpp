@@ -52,6 +52,21 @@ void ModelExtension::from_move_coordinates(const double* u, double* psi) const {
   std::copy(u, u + dim(), psi);
 }
 
+std::vector<double> ModelExtension::move_coordinate_spans() const {
+  const auto& params = parameters();
+  std::vector<double> at(params.size()), u_lo(params.size()), u_hi(params.size()), spans(params.size());
+  for (std::size_t j = 0; j < params.size(); ++j) at[j] = params[j].null_value;
+  for (std::size_t j = 0; j < params.size(); ++j) {
+    std::vector<double> edge = at;
+    edge[j] = params[j].lo;
+    to_move_coordinates(edge.data(), u_lo.data());
+    edge[j] = params[j].hi;
+    to_move_coordinates(edge.data(), u_hi.data());
+    spans[j] = std::abs(u_hi[j] - u_lo[j]);
+  }
+  return spans;
+}
+
 double ModelExtension::log_stiffness_density(const double* /*psi*/, double k, double mean_npm, double sd_npm) const {
   return log_normal_density(k, mean_npm, sd_npm);
 }

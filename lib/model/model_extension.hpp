@@ -131,6 +131,9 @@ class ModelExtension {
   virtual void to_move_coordinates(const double* psi, double* u) const;
   virtual void from_move_coordinates(const double* u, double* psi) const;
   virtual double log_move_jacobian(const double* /*psi*/) const { return 0.0; }  // log |det ∂ψ/∂u|
+  // How far each move coordinate u_j moves as ψ_j crosses its box with the others at their null
+  // values (the box's width for ψ itself): the scale both samplers start or floor their walks at.
+  std::vector<double> move_coordinate_spans() const;
 
   Eigen::Index dim() const { return static_cast<Eigen::Index>(parameters().size()); }
   bool in_prior(const double* psi) const;

@@ -4,21 +4,16 @@
 #include <cmath>
 #include <limits>
 
+#include "model/fleet_model.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::model {
 
 namespace {
-constexpr double kLogSqrt2Pi = 0.91893853320467274178;
 // A z-sd below this (an entry whose z-likelihood is a spike) is widened to it: the proposal must
 // not be narrower than the target, and a tenth of a millimetre is far below any road's line
 // spacing.
 constexpr double kMinLateralSdM = 1e-4;
-
-double log_normal(double x, double mean, double sd) {
-  const double t = (x - mean) / sd;
-  return -0.5 * t * t - std::log(sd) - kLogSqrt2Pi;
-}
 }  // namespace
 
 TableProposal::TableProposal(const TableView& table, const FleetMarginal& marginal, const fleet::HyperVector& theta) {
@@ -64,9 +59,9 @@ double TableProposal::log_density(const TruckLatent& x) const {
   double top = -std::numeric_limits<double>::infinity();
   std::vector<double> terms(k_npm_.size());
   for (std::size_t g = 0; g < k_npm_.size(); ++g) {
-    terms[g] = log_pi_[g] + log_normal(x.stiffness_npm, k_npm_[g], k_spread_npm_) +
-               log_normal(x.tyre_stiffness_npm, kt_npm_[g], kt_spread_npm_) +
-               log_normal(x.lateral_m, z_mean_m_[g], z_sd_m_[g]);
+    terms[g] = log_pi_[g] + fleet::log_normal_density(x.stiffness_npm, k_npm_[g], k_spread_npm_) +
+               fleet::log_normal_density(x.tyre_stiffness_npm, kt_npm_[g], kt_spread_npm_) +
+               fleet::log_normal_density(x.lateral_m, z_mean_m_[g], z_sd_m_[g]);
     top = std::max(top, terms[g]);
   }
   if (!(top > -std::numeric_limits<double>::infinity())) return top;

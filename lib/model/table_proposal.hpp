@@ -14,6 +14,7 @@
 // by Metropolis–Hastings with the integrator (discrepancy/marginal_draws.hpp).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -51,18 +52,8 @@ class TableProposal {
 template <class Engine>
 TruckLatent TableProposal::draw(Engine& engine) const {
   const double u = fleet::uniform_open01(engine);
-  std::size_t g = 0;
-  {
-    std::size_t lo = 0, hi = cumulative_.size() - 1;  // the first g with cumulative_[g] >= u
-    while (lo < hi) {
-      const std::size_t mid = (lo + hi) / 2;
-      if (cumulative_[mid] >= u)
-        hi = mid;
-      else
-        lo = mid + 1;
-    }
-    g = lo;
-  }
+  // The first entry whose cumulative share reaches u (the last one is exactly 1).
+  const auto g = static_cast<std::size_t>(std::lower_bound(cumulative_.begin(), cumulative_.end(), u) - cumulative_.begin());
   constexpr double kInf = std::numeric_limits<double>::infinity();
   auto normal = [&engine] { return fleet::truncated_normal_quantile(fleet::uniform_open01(engine), 0.0, 1.0, -kInf, kInf); };
   TruckLatent x;

@@ -241,13 +241,7 @@ void PassIntegrator::run_blocks(const QuarterCarBatch& cars, const Eigen::ArrayX
   double last_speed = -1.0;
   TruckCoefficients last_coeffs;
   std::vector<PartialCoefficients> last_partial(std::max<std::size_t>(nfrac, 1));
-  auto same_car = [&](const QuarterCar& a, double speed) {
-    return speed == last_speed && a.sprung_mass_kg == last_car.sprung_mass_kg &&
-           a.unsprung_mass_kg == last_car.unsprung_mass_kg &&
-           a.suspension_stiffness_npm == last_car.suspension_stiffness_npm &&
-           a.suspension_damping_nspm == last_car.suspension_damping_nspm &&
-           a.tyre_stiffness_npm == last_car.tyre_stiffness_npm && a.tyre_damping_nspm == last_car.tyre_damping_nspm;
-  };
+  auto same_car = [&](const QuarterCar& a, double speed) { return speed == last_speed && a == last_car; };
 
   for (Eigen::Index b0 = 0; b0 < n; b0 += BS) {
     const int nb = static_cast<int>(std::min<Eigen::Index>(BS, n - b0));

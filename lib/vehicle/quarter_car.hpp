@@ -22,6 +22,7 @@ struct QuarterCar {
   double tyre_damping_nspm = 0.0;             // c_t
 
   double static_weight_n() const { return (sprung_mass_kg + unsprung_mass_kg) * gravity_mps2; }
+  bool operator==(const QuarterCar&) const = default;
 };
 
 // Throws std::invalid_argument naming the offending field unless every mass and stiffness is
