@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -260,19 +261,27 @@ TEST_CASE("the latent core runs every scheduled move as its schedule says", "[fl
   const auto o = smc_options(128, 2, 5);
   const smc::MoveSchedule schedule = fleet::FleetSmc::move_schedule(o);
   // The schedule is data: the newest truck's random walk, the older trucks at phi = 1 twice a
-  // stage, then theta; no extension moves without an extension.
-  REQUIRE(schedule.sweep.size() == 3);
+  // stage, the tyre-stiffness interweave at phi = 1 once a stage, then theta; no extension moves
+  // without an extension.
+  REQUIRE(schedule.sweep.size() == 4);
   CHECK(schedule.sweep[1].model_move == "older trucks");
   CHECK(schedule.sweep[1].only_at_phi_one);
   CHECK(schedule.sweep[1].max_runs_per_stage == o.older_sweeps);
-  CHECK(schedule.sweep[2].model_move == "theta");
+  CHECK(schedule.sweep[2].model_move == "tyre stiffness interweave");
+  CHECK(schedule.sweep[2].only_at_phi_one);
+  CHECK(schedule.sweep[2].max_runs_per_stage == o.interweave_sweeps);
+  CHECK(schedule.sweep[3].model_move == "theta");
   CHECK_THAT(schedule.describe(), Catch::Contains("older trucks") && Catch::Contains("at most 2 per stage"));
 
   fleet::FleetSmc smc(c.site, o);
   for (std::size_t t = 0; t < c.log.records.size(); ++t) {
     const smc::StageSummary& s = smc.absorb(c.log.records[t]);
-    int older_runs = 0, older_skipped = 0;
+    int older_runs = 0, older_skipped = 0, interweave_runs = 0;
     for (const smc::StepInfo& step : s.steps) {
+      const smc::MoveRecord* interweave = step.mh.find("tyre stiffness interweave");
+      REQUIRE(interweave != nullptr);
+      interweave_runs += interweave->runs;
+      if (step.phi < 1.0) CHECK(interweave->runs == 0);
       const smc::MoveRecord* walk = step.mh.find("random walk", step.mh.block_names.at(0));
       const smc::MoveRecord* theta = step.mh.find("theta");
       const smc::MoveRecord* older = step.mh.find("older trucks");
@@ -292,10 +301,83 @@ TEST_CASE("the latent core runs every scheduled move as its schedule says", "[fl
     // older_sweeps times in the stage, with an acceptance.
     if (t == 0) {
       CHECK(older_runs == 0);
+      CHECK(interweave_runs == 0);
     } else {
       CHECK(older_runs == o.older_sweeps);
+      CHECK(interweave_runs == o.interweave_sweeps);
       const smc::MoveRecord* last = s.steps.back().mh.find("older trucks");
       CHECK((last->acceptance > 0.0 && last->acceptance <= 1.0));
     }
   }
+}
+
+TEST_CASE("the tyre-stiffness interweave moves (K_t, sigma_kt) with every k_t, keeps each truck's standardised "
+          "k_t and re-simulates its residuals",
+          "[fleet][smc]") {
+  Case c(6, 13);
+  fleet::FleetSmc smc(c.site, smc_options(64, 2, 5));
+  for (const auto& r : c.log.records) smc.absorb(r);
+  auto& target = const_cast<fleet::FleetTarget&>(smc.target());
+  const auto moves = target.model_moves();
+  const auto it = std::find(moves.begin(), moves.end(), std::string(fleet::FleetTarget::kInterweaveMove));
+  REQUIRE(it != moves.end());
+  const int move = static_cast<int>(it - moves.begin());
+  const Eigen::Index P = target.particles(), n = target.kept_trucks();
+  const Eigen::MatrixXd theta_before = target.theta(), latents_before = target.latents();
+  const auto offsets_before = density_offsets(smc, c);
+  Eigen::ArrayXd log_base(P), loglik(P);
+  target.log_density(log_base, loglik, smc::ParallelFor(1));
+  const auto result = target.run_model_move(move, 0, 1.0, smc::RngFactory(77), smc::ParallelFor(2), log_base, loglik);
+  REQUIRE(result.ran);
+  CHECK((result.acceptance > 0.0 && result.acceptance < 1.0));
+
+  Eigen::Index moved = 0;
+  for (Eigen::Index i = 0; i < P; ++i) {
+    const double kt0 = theta_before(fleet::kKt, i), s0 = theta_before(fleet::kSigmaKt, i);
+    const double kt1 = target.theta()(fleet::kKt, i), s1 = target.theta()(fleet::kSigmaKt, i);
+    // Only K_t and sigma_kt of theta may change, and the k and z of no truck.
+    for (int h = 0; h < fleet::kHyperCount; ++h) {
+      if (h != fleet::kKt && h != fleet::kSigmaKt) CHECK(target.theta()(h, i) == theta_before(h, i));
+    }
+    for (Eigen::Index j = 0; j < n; ++j) {
+      CHECK(target.latents()(3 * j + fleet::kStiffness, i) == latents_before(3 * j + fleet::kStiffness, i));
+      CHECK(target.latents()(3 * j + fleet::kLateral, i) == latents_before(3 * j + fleet::kLateral, i));
+      const double eps0 = (latents_before(3 * j + fleet::kTyreStiffness, i) - kt0) / s0;
+      const double eps1 = (target.latents()(3 * j + fleet::kTyreStiffness, i) - kt1) / s1;
+      CHECK(eps1 == Approx(eps0).margin(1e-9));
+    }
+    if (kt1 != kt0) {
+      ++moved;
+      CHECK(s1 != s0);
+    }
+  }
+  CHECK(static_cast<double>(moved) == Approx(result.acceptance * static_cast<double>(P)).margin(0.5));
+
+  // The residual cache is the integrator's at the new latents, truck by truck.
+  site::TruckBatch batch;
+  batch.resize(n * P);
+  for (Eigen::Index i = 0; i < P; ++i) {
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const Eigen::Index b = i * n + j;
+      batch.speed_mps[b] = target.kept_speed_mps()[static_cast<std::size_t>(j)];
+      batch.sprung_mass_kg[b] = target.kept_sprung_mass_kg()[static_cast<std::size_t>(j)];
+      batch.stiffness_npm[b] = target.latents()(3 * j + fleet::kStiffness, i);
+      batch.tyre_stiffness_npm[b] = target.latents()(3 * j + fleet::kTyreStiffness, i);
+      batch.lateral_m[b] = target.latents()(3 * j + fleet::kLateral, i);
+    }
+  }
+  Eigen::ArrayXXd ifs(c.site.sensors(), n * P);
+  c.site.impact_factors(batch, ifs);
+  for (Eigen::Index i = 0; i < P; ++i) {
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double ssr = (ifs.col(i * n + j).matrix() - target.kept_observed_if()[static_cast<std::size_t>(j)]).squaredNorm();
+      CHECK(target.sums_of_squared_residuals()(j, i) == Approx(ssr).epsilon(1e-9));
+    }
+  }
+  // log γ + ℓ the move wrote is still the log posterior plus the same constant.
+  const auto offsets_after = density_offsets(smc, c);
+  for (double o : offsets_after.offsets) CHECK(o == Approx(offsets_before.offsets.front()).margin(1e-7 * offsets_before.scale));
+  Eigen::ArrayXd fresh_base(P), fresh_loglik(P);
+  target.log_density(fresh_base, fresh_loglik, smc::ParallelFor(1));
+  for (Eigen::Index i = 0; i < P; ++i) CHECK(log_base[i] + loglik[i] == Approx(fresh_base[i] + fresh_loglik[i]).epsilon(1e-12));
 }

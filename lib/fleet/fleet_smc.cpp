@@ -35,6 +35,7 @@ smc::MoveSchedule FleetSmc::move_schedule(const Options& o) {
   if (o.older_sweeps < 0) throw UsageError("fleet SMC: older_sweeps must be >= 0");
   if (o.extension_sweeps < 0) throw UsageError("fleet SMC: extension_sweeps must be >= 0");
   if (o.extension_jump_sweeps < 0) throw UsageError("fleet SMC: extension_jump_sweeps must be >= 0");
+  if (o.interweave_sweeps < 0) throw UsageError("fleet SMC: interweave_sweeps must be >= 0");
   auto model_move = [](std::string_view name, bool at_phi_one, int per_stage) {
     smc::ScheduledMove m;
     m.kind = smc::MoveKind::kModel;
@@ -52,6 +53,7 @@ smc::MoveSchedule FleetSmc::move_schedule(const Options& o) {
       s.sweep.push_back(model_move(FleetTarget::kExtensionJumpMove, true, o.extension_jump_sweeps));
     if (o.extension_sweeps > 0) s.sweep.push_back(model_move(FleetTarget::kExtensionWalkMove, true, o.extension_sweeps));
   }
+  if (o.interweave_sweeps > 0) s.sweep.push_back(model_move(FleetTarget::kInterweaveMove, true, o.interweave_sweeps));
   if (e != nullptr && e->edits_stiffness_distribution())
     s.sweep.push_back(model_move(FleetTarget::kStiffnessMove, false, -1));
   s.sweep.push_back(model_move(FleetTarget::kThetaMove, false, -1));
@@ -77,7 +79,9 @@ void FleetSmc::rejuvenate(int sweeps) {
 }
 
 namespace {
-constexpr std::uint32_t kCheckpointVersion = 1;  // checkpoint_header.hpp
+// checkpoint_header.hpp. 1: the latent core before the tyre-stiffness interweave; 2: the marginal
+// core (marginal_smc.cpp); 3: the latent core with the interweave's adapted scale.
+constexpr std::uint32_t kCheckpointVersion = 3;
 }  // namespace
 
 void FleetSmc::save(BinaryWriter& out) const {
@@ -92,8 +96,13 @@ void FleetSmc::save(BinaryWriter& out) const {
 }
 
 void FleetSmc::restore(BinaryReader& in) {
-  read_checkpoint_header(in, kCheckpointVersion, site_, sampler_.options().seed, [](std::uint32_t v) {
-    return "checkpoint format version " + std::to_string(v) + " is not the latent core's (1): resume it without --window";
+  read_checkpoint_header(in, kCheckpointVersion, site_, sampler_.options().seed, [](std::uint32_t v) -> std::string {
+    if (v == 1) {
+      return "checkpoint format version 1 was written by an older latent core (before the tyre-stiffness "
+             "interweave); this build's latent core reads version 3: replay the log into a new state directory";
+    }
+    if (v == 2) return "checkpoint format version 2 is the marginal core's, not the latent core's (3): resume it without --window";
+    return "unsupported checkpoint format version " + std::to_string(v);
   });
   smc::TemperedSampler::State state;
   state.stages_run = in.value<std::int32_t>("stages_run");

@@ -47,14 +47,18 @@ class FleetSmc {
     // scaled on the cloud, cannot reach a mode the cloud lost while early trucks favoured another;
     // with the jump, a particle that reaches it is then favoured by the reweighting of each later truck.
     int extension_jump_sweeps = 1;
+    // Runs per stage of "tyre stiffness interweave", at φ = 1 (exact regime only). One: speed_bias
+    // left a seed with 10 % of its weight in the small-σ_kt funnel without it.
+    int interweave_sweeps = 1;
   };
 
   // The latent core's sweep, in order: a random walk on the newest truck's latents (the engine's
   // block); "older trucks" (φ = 1, older_sweeps per stage); with an extension that moves the
   // forward model, "extension jump" (φ = 1, extension_jump_sweeps per stage, if it has a jump) and
-  // "extension random walk" (φ = 1, extension_sweeps per stage); with one that replaces the
-  // stiffness distribution, "stiffness distribution"; then "theta". The rest of options.sampler's
-  // schedule (trigger, sweep counts, final_sweeps) is kept.
+  // "extension random walk" (φ = 1, extension_sweeps per stage); "tyre stiffness interweave"
+  // (φ = 1, interweave_sweeps per stage); with an extension that replaces the stiffness
+  // distribution, "stiffness distribution"; then "theta". The rest of options.sampler's schedule
+  // (trigger, sweep counts, final_sweeps) is kept.
   static smc::MoveSchedule move_schedule(const Options& options);
 
   // UsageError on invalid options (the sampler's IsValid message).

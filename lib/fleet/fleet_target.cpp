@@ -64,6 +64,7 @@ void FleetTarget::initialise(const smc::RngFactory& rngs) {
   }
   extension_scale_ = 1.0;
   stiffness_scale_ = 1.0;
+  interweave_scale_ = 1.0;
   latents_.resize(0, options_.particles);
   ssr_.resize(0, options_.particles);
   sums_.setZero();
@@ -329,6 +330,7 @@ void FleetTarget::save(BinaryWriter& out) const {
   out.matrix(ssr_);
   out.value<std::uint64_t>(older_scale_.size());
   for (double v : older_scale_) out.value(v);
+  out.value(interweave_scale_);
   if (psi_.rows() > 0) {  // only with an extension, so checkpoints without one keep their format
     out.matrix(psi_);
     out.value(extension_scale_);
@@ -369,6 +371,7 @@ void FleetTarget::load(BinaryReader& in) {
   if (scales != static_cast<std::uint64_t>(n > 0 ? n - 1 : 0)) in.fail("older_scale", "size does not match the trucks");
   older_scale_.assign(scales, 1.0);
   for (auto& v : older_scale_) v = in.value<double>("older_scale");
+  interweave_scale_ = in.value<double>("interweave_scale");
   if (psi_.rows() > 0) {
     psi_ = in.matrix("psi", psi_.rows(), P);
     extension_scale_ = in.value<double>("extension_scale");

@@ -29,7 +29,7 @@ using detail::standard_normal;
 
 std::vector<std::string> FleetTarget::model_moves() const {
   return {std::string(kOlderTrucksMove), std::string(kExtensionJumpMove), std::string(kExtensionWalkMove),
-          std::string(kStiffnessMove), std::string(kThetaMove)};
+          std::string(kStiffnessMove), std::string(kThetaMove), std::string(kInterweaveMove)};
 }
 
 smc::TemperedModel::ModelMoveResult FleetTarget::run_model_move(int move, int run_in_stage, double phi,
@@ -63,6 +63,9 @@ smc::TemperedModel::ModelMoveResult FleetTarget::run_model_move(int move, int ru
     case 4:  // theta
       theta_moves(phi, rngs.child(0), parallel, log_base, loglik);
       return {true};
+    case 5:  // tyre stiffness interweave
+      if (!tyre_stiffness_interweave(phi, rngs.child(5), parallel, log_base, loglik)) return {false};
+      return {true, interweave_acceptance_};
     default:
       throw UsageError("fleet target: no model move " + std::to_string(move));
   }
@@ -83,6 +86,7 @@ void FleetTarget::rejuvenate(int sweeps, const smc::RngFactory& rngs, const smc:
       extension_sweep(r.child(2), parallel, PsiMove::kRandomWalk);
     }
     if (stiffness_edited()) stiffness_distribution_sweep(r.child(4), parallel);
+    tyre_stiffness_interweave(1.0, r.child(5), parallel, log_base, loglik);
     theta_moves(1.0, r.child(0), parallel, log_base, loglik);
   }
   scales.pop_back();
@@ -143,6 +147,85 @@ void FleetTarget::theta_moves(double phi, const smc::RngFactory& rngs, const smc
       loglik[i] = newest_loglik(ssr_new, t[kSigmaIf]);
     }
   });
+}
+
+bool FleetTarget::tyre_stiffness_interweave(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
+                                            Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) {
+  const Eigen::Index P = options_.particles, n = kept_trucks(), newest = n - 1;
+  if (n < 2 || n != total_trucks_) return false;
+  // The walk in (K_t, log σ_kt), on the cloud's spread (equal weights: this runs right after a
+  // stage, whatever the weights), times a multiplier adapted on acceptance. The cloud's spread is
+  // the marginal posterior's; the conditional given ε is narrower, which the multiplier takes up.
+  Eigen::MatrixXd state(2, P);
+  state.row(0) = theta_.row(kKt);
+  state.row(1) = theta_.row(kSigmaKt).array().log().matrix();
+  const Eigen::MatrixXd chol =
+      Eigen::LLT<Eigen::MatrixXd>(smc::proposal_covariance(state, Eigen::ArrayXd::Ones(P), 2.38 * interweave_scale_))
+          .matrixL();
+  const auto& prior = options_.prior;
+  Eigen::Matrix2Xd proposed(2, P);  // (K_t', σ_kt')
+  Eigen::ArrayXd log_u(P);
+  std::vector<char> inside(static_cast<std::size_t>(P), 0);
+  Eigen::MatrixXd proposals = latents_;
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+      const Eigen::Vector2d z(standard_normal(rng), standard_normal(rng));
+      const Eigen::Vector2d step = chol * z;
+      const double mean = theta_(kKt, i), sd = theta_(kSigmaKt, i);
+      const double mean_new = mean + step[0], sd_new = sd * std::exp(step[1]);
+      proposed.col(i) = Eigen::Vector2d(mean_new, sd_new);
+      log_u[i] = std::log(uniform_open01(rng));
+      const bool in_box = mean_new >= prior.lo[kKt] && mean_new <= prior.hi[kKt] && sd_new >= prior.lo[kSigmaKt] &&
+                          sd_new <= prior.hi[kSigmaKt];
+      inside[static_cast<std::size_t>(i)] = in_box ? 1 : 0;
+      if (!in_box) continue;
+      for (Eigen::Index j = 0; j < n; ++j) {
+        double& kt = proposals(3 * j + kTyreStiffness, i);
+        kt = mean_new + sd_new * (kt - mean) / sd;
+      }
+    }
+  });
+  // Every kept truck of every particle whose proposal is inside the box, at the proposal (a k_t
+  // at or below zero gets an infinite SSR: rejected, as the centred latent moves do).
+  Eigen::MatrixXd new_ssr = Eigen::MatrixXd::Constant(n, P, kInf);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    std::vector<SsrJob> jobs;
+    for (Eigen::Index i = begin; i < end; ++i) {
+      if (!inside[static_cast<std::size_t>(i)]) continue;
+      for (Eigen::Index j = 0; j < n; ++j) {
+        jobs.push_back({j, proposals.col(i).data() + 3 * j, &new_ssr(j, i), psi_.col(i).data()});
+      }
+    }
+    simulate_ssr(jobs);
+  });
+  passes_ += n * static_cast<long long>(std::count(inside.begin(), inside.end(), 1));
+  std::vector<char> moved(static_cast<std::size_t>(P), 0);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      if (!inside[static_cast<std::size_t>(i)] || !new_ssr.col(i).allFinite()) continue;
+      const double sigma_if = theta_(kSigmaIf, i);
+      double log_ratio = std::log(proposed(1, i) / theta_(kSigmaKt, i));  // the log-scale walk's Jacobian
+      for (Eigen::Index j = 0; j < n; ++j) {
+        const double power = j == newest ? phi : 1.0;
+        log_ratio += power * (log_likelihood_from_ssr(new_ssr(j, i), sensors_, sigma_if) -
+                              log_likelihood_from_ssr(ssr_(j, i), sensors_, sigma_if));
+      }
+      if (!(log_u[i] < log_ratio)) continue;
+      theta_(kKt, i) = proposed(0, i);
+      theta_(kSigmaKt, i) = proposed(1, i);
+      latents_.col(i) = proposals.col(i);
+      ssr_.col(i) = new_ssr.col(i);
+      recompute_sums(i);
+      log_base[i] = base_density(i, theta_of(i), latents_.col(i).data() + 3 * newest);
+      loglik[i] = newest_loglik(ssr_(newest, i), theta_(kSigmaIf, i));
+      moved[static_cast<std::size_t>(i)] = 1;
+    }
+  });
+  // A serial reduction: the same whatever the threads.
+  interweave_acceptance_ = static_cast<double>(std::count(moved.begin(), moved.end(), 1)) / static_cast<double>(P);
+  interweave_scale_ = smc::tuned_scale_factor(interweave_scale_, interweave_acceptance_);
+  return true;
 }
 
 void FleetTarget::older_trucks_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel,

@@ -56,7 +56,8 @@ PosteriorCloud MarginalSmc::cloud() const {
 }
 
 namespace {
-// Version 1 was the latent-variable core (FleetSmc); version 2 is this one (checkpoint_header.hpp).
+// Version 1 was the latent-variable core (FleetSmc) of 0.1; version 2 is this one; 3 the latent core
+// now (checkpoint_header.hpp).
 constexpr std::uint32_t kCheckpointVersion = 2;
 }  // namespace
 
@@ -91,6 +92,7 @@ void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {
              "default core reads version 2: replay the log into a new state directory (or resume it with --window, "
              "which keeps the latent core)";
     }
+    if (v == 3) return "checkpoint format version 3 is the latent core's (--window), not the marginal core's (2)";
     return "unsupported checkpoint format version " + std::to_string(v);
   });
   smc::TemperedSampler::State state;
