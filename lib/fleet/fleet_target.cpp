@@ -243,6 +243,22 @@ void FleetTarget::simulate_ssr(const std::vector<SsrJob>& jobs) const {
   }
 }
 
+Eigen::MatrixXd FleetTarget::every_kept_truck_ssr(const Eigen::MatrixXd& latents, const Eigen::MatrixXd& psi,
+                                                  const std::vector<char>& inside, const smc::ParallelFor& parallel) {
+  const Eigen::Index P = options_.particles, n = kept_trucks();
+  Eigen::MatrixXd ssr = Eigen::MatrixXd::Constant(n, P, std::numeric_limits<double>::infinity());
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    std::vector<SsrJob> jobs;
+    for (Eigen::Index i = begin; i < end; ++i) {
+      if (!inside[static_cast<std::size_t>(i)]) continue;
+      for (Eigen::Index j = 0; j < n; ++j) jobs.push_back({j, latents.col(i).data() + 3 * j, &ssr(j, i), psi.col(i).data()});
+    }
+    simulate_ssr(jobs);
+  });
+  passes_ += n * static_cast<long long>(std::count(inside.begin(), inside.end(), 1));
+  return ssr;
+}
+
 void FleetTarget::residuals(Eigen::Index truck, const Eigen::Ref<const Eigen::MatrixXd>& latents,
                             Eigen::Ref<Eigen::ArrayXd> ssr_out, const smc::ParallelFor& parallel) {
   parallel(latents.cols(), [&](Eigen::Index begin, Eigen::Index end) {

@@ -175,6 +175,11 @@ class FleetTarget final : public smc::TemperedModel {
   // Runs the jobs through one batched integrator call (serial: callers split the work).
   // Non-physical latents (k or k_t <= 0, z off the road) get an infinite SSR, unsimulated.
   void simulate_ssr(const std::vector<SsrJob>& jobs) const;
+  // SSR of every kept truck (n x P) at the latents `latents` (3n x P) and extension parameters
+  // `psi` (d x P), for the particles marked in `inside` (+inf for the others), in one batched
+  // integrator call per chunk of particles; counts the passes.
+  Eigen::MatrixXd every_kept_truck_ssr(const Eigen::MatrixXd& latents, const Eigen::MatrixXd& psi,
+                                       const std::vector<char>& inside, const smc::ParallelFor& parallel);
   // SSR of truck `truck` at the latents in columns of `latents` (3 x P) for every particle.
   void residuals(Eigen::Index truck, const Eigen::Ref<const Eigen::MatrixXd>& latents,
                  Eigen::Ref<Eigen::ArrayXd> ssr_out, const smc::ParallelFor& parallel);

@@ -21,10 +21,6 @@
 
 namespace ssrfleet::fleet {
 
-namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
-}  // namespace
-
 using detail::standard_normal;
 
 std::vector<std::string> FleetTarget::model_moves() const {
@@ -188,18 +184,7 @@ bool FleetTarget::tyre_stiffness_interweave(double phi, const smc::RngFactory& r
   });
   // Every kept truck of every particle whose proposal is inside the box, at the proposal (a k_t
   // at or below zero gets an infinite SSR: rejected, as the centred latent moves do).
-  Eigen::MatrixXd new_ssr = Eigen::MatrixXd::Constant(n, P, kInf);
-  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
-    std::vector<SsrJob> jobs;
-    for (Eigen::Index i = begin; i < end; ++i) {
-      if (!inside[static_cast<std::size_t>(i)]) continue;
-      for (Eigen::Index j = 0; j < n; ++j) {
-        jobs.push_back({j, proposals.col(i).data() + 3 * j, &new_ssr(j, i), psi_.col(i).data()});
-      }
-    }
-    simulate_ssr(jobs);
-  });
-  passes_ += n * static_cast<long long>(std::count(inside.begin(), inside.end(), 1));
+  const Eigen::MatrixXd new_ssr = every_kept_truck_ssr(proposals, psi_, inside, parallel);
   std::vector<char> moved(static_cast<std::size_t>(P), 0);
   parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index i = begin; i < end; ++i) {
@@ -355,18 +340,7 @@ void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::Parall
     inside[static_cast<std::size_t>(i)] = ext.in_prior(proposals.col(i).data()) ? 1 : 0;
   }
   // Every kept truck of every particle whose proposal is inside the prior, at the proposal.
-  Eigen::MatrixXd new_ssr = Eigen::MatrixXd::Constant(n, P, kInf);
-  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
-    std::vector<SsrJob> jobs;
-    for (Eigen::Index i = begin; i < end; ++i) {
-      if (!inside[static_cast<std::size_t>(i)]) continue;
-      for (Eigen::Index j = 0; j < n; ++j) {
-        jobs.push_back({j, latents_.col(i).data() + 3 * j, &new_ssr(j, i), proposals.col(i).data()});
-      }
-    }
-    simulate_ssr(jobs);
-  });
-  passes_ += n * static_cast<long long>(std::count(inside.begin(), inside.end(), 1));
+  const Eigen::MatrixXd new_ssr = every_kept_truck_ssr(latents_, proposals, inside, parallel);
   Eigen::Index moved = 0;
   for (Eigen::Index i = 0; i < P; ++i) {
     if (!inside[static_cast<std::size_t>(i)]) continue;
