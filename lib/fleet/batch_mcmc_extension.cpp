@@ -110,7 +110,7 @@ long long choose_psi_start(const ModelExtension& extension, const BatchMcmcOptio
   const bool with_stiffness = extension.edits_stiffness_distribution() && !forward;
   const auto d_psi = static_cast<std::size_t>(extension.dim());
   const std::size_t d = d_psi + (with_stiffness ? 2 : 0);
-  if (d > std::size(kPrimes)) return 0;  // no Halton bases for so many parameters: keep the start
+  if (d_psi == 0 || d > std::size(kPrimes)) return 0;  // nothing to choose, or no Halton bases for so many  // no Halton bases for so many parameters: keep the start
   // Free candidates are many more: they only sum N stiffness densities each.
   const long long candidates =
       static_cast<long long>(options.psi_start_candidates) * (with_stiffness ? kFreeCandidateFactor : 1);
@@ -246,6 +246,7 @@ double ExtensionSteps::try_psi(McmcEngine& engine, const std::vector<double>& pr
 void ExtensionSteps::psi_steps(McmcEngine& engine, int sweep, const HyperVector& theta, const Eigen::MatrixXd& latents,
                                Eigen::ArrayXd& ssr, ResidualEvaluator& evaluator, const std::vector<int>& all,
                                bool burning_in, bool collect) {
+  if (extension_.dim() == 0) return;  // every parameter fixed by the model spec
   long long discard = 0;
   if (extension_.jump_draws() > 0 && options_.psi_jump_every > 0 && sweep % options_.psi_jump_every == 0) {
     std::vector<double> u(static_cast<std::size_t>(extension_.jump_draws())), proposal(psi_.size());

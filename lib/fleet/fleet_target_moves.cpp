@@ -34,7 +34,10 @@ smc::TemperedModel::ModelMoveResult FleetTarget::run_model_move(int move, int ru
                                                                 Eigen::Ref<Eigen::ArrayXd> log_base,
                                                                 Eigen::Ref<Eigen::ArrayXd> loglik) {
   // Each move draws from its own child of rngs (the keys predate the schedule: same bits).
-  const bool extension_moves_forward = options_.extension != nullptr && options_.extension->edits_forward();
+  // ψ moves with the likelihood when the extension edits the forward model and has a free parameter
+  // (a model spec may fix them all).
+  const bool extension_moves_forward =
+      options_.extension != nullptr && options_.extension->edits_forward() && psi_.rows() > 0;
   switch (move) {
     case 0:  // older trucks
       if (kept_trucks() < 2) return {false};
@@ -78,7 +81,7 @@ void FleetTarget::rejuvenate(int sweeps, const smc::RngFactory& rngs, const smc:
   for (int sweep = 0; sweep < sweeps; ++sweep) {
     const smc::RngFactory r = rngs.child(static_cast<std::uint64_t>(sweep));
     older_trucks_sweep(r.child(1), parallel, sweep % 2 == 1, kept_trucks(), scales);
-    if (options_.extension != nullptr && options_.extension->edits_forward()) {
+    if (options_.extension != nullptr && options_.extension->edits_forward() && psi_.rows() > 0) {
       extension_sweep(r.child(2), parallel, PsiMove::kRandomWalk);
     }
     if (stiffness_edited()) stiffness_distribution_sweep(r.child(4), parallel);
