@@ -12,6 +12,7 @@
 #include "fleet/posterior_summary.hpp"
 #include "io/posterior_json.hpp"
 #include "io/wim_log.hpp"
+#include "model/model_spec.hpp"
 #include "site/road_source.hpp"
 #include "util/errors.hpp"
 
@@ -37,24 +38,29 @@ int run_fit(int argc, const char* const argv[]) {
   positional.add("log", 1);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, &positional, vm,
-                     "usage: ssrfleet fit LOG [--road AS1|FILE] [--out posterior.json] [--particles P] [--seed K]")) {
+                     "usage: ssrfleet fit LOG [--road AS1|FILE] [--model SPEC] [--out posterior.json] [--particles P] [--seed K]")) {
     return 0;
   }
   fit.final_sweeps_given = !vm["final-sweeps"].defaulted();
   fit.max_sweeps_given = !vm["max-sweeps"].defaulted();
+  fit.core_given = !vm["core"].defaulted();
   const std::uint64_t seed = parse_seed(seed_text);
   if (method != "smc" && method != "mcmc") throw UsageError("--method '" + method + "': must be smc or mcmc");
 
   const site::Site site(site::load_road(road), site_flags.to_options());
+  const fleet::ModelSpec model = fleet::parse_model_spec(fit.model, site);
   const auto records = read_site_log(log_path, site, site_flags);
   if (!quiet) {
     std::cerr << "ssrfleet fit: " << records.size() << " trucks from " << log_path << ", road " << site.surface().name
-              << ", method " << method << ", seed " << seed << "\n";
+              << ", method " << method << ", model " << model.text << ", seed " << seed << "\n";
   }
   const auto start = std::chrono::steady_clock::now();
-  const fleet::PosteriorCloud cloud = method == "smc" ? fit_smc(site, records, fit, seed, quiet ? nullptr : &std::cerr)
-                                                      : fit_mcmc(site, records, fit, seed, quiet ? nullptr : &std::cerr);
-  write_output(out, [&](std::ostream& os) { os << io::posterior_to_json(cloud, fleet::summarise_cloud(cloud)).dump(1) << "\n"; });
+  std::ostream* progress = quiet ? nullptr : &std::cerr;
+  const fleet::PosteriorCloud cloud = method == "smc" ? fit_smc(site, records, fit, seed, progress, model.extension.get())
+                                                      : fit_mcmc(site, records, fit, seed, progress, model.extension.get());
+  write_output(out, [&](std::ostream& os) {
+    os << io::posterior_to_json(cloud, fleet::summarise_cloud(cloud), fleet::summarise_psi(cloud)).dump(1) << "\n";
+  });
   if (!quiet) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cerr << "ssrfleet fit: done in " << std::fixed << std::setprecision(1) << s << " s -> " << out << "\n";

@@ -92,7 +92,7 @@ int run_predict(int argc, const char* const argv[]) {
   write_output(out, [&](std::ostream& os) { predict::write_prediction_csv(os, prediction); });
   if (!quiet) {
     std::cerr << "ssrfleet predict: " << prediction.position_m.size() << " positions on road " << site.surface().name
-              << " from " << cloud.trucks_seen << " trucks (" << cloud.method << "), "
+              << " from " << cloud.trucks_seen << " trucks (" << cloud.method << ", model " << cloud.model << "), "
               << options.theta_draws * options.trucks_per_draw << " simulated passes\n";
   }
   return 0;

@@ -9,8 +9,10 @@
 namespace ssrfleet::cli {
 
 fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
-                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress) {
+                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress,
+                               const fleet::ModelExtension* extension) {
   fleet::BatchMcmcOptions o;
+  o.extension = extension;
   if (flags.iterations > 100'000'000 || flags.burn_in > flags.iterations || flags.thin < 1) {
     throw UsageError("--iterations / --burn-in / --thin: need 1 <= thin, burn-in < iterations <= 1e8");
   }
@@ -31,7 +33,7 @@ fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records
   if (!o.IsValid(&why)) throw UsageError(why);
   const fleet::BatchMcmcResult r = fleet::run_batch_mcmc(site, records, o);
 
-  return fleet::to_posterior_cloud(r, site, records);
+  return fleet::to_posterior_cloud(r, site, records, extension);
 }
 
 }  // namespace ssrfleet::cli

@@ -19,7 +19,10 @@ namespace ssrfleet::cli {
 
 // The SMC defaults are the cores' own, so `fit` and the library cannot drift apart.
 struct FitFlags {
-  std::string core = "marginal";  // marginal (default) | latent
+  // The model fitted (model/model_spec.hpp): "base", or effects such as tyre_damping+sensor_gain:sensor=11.
+  std::string model = "base";
+  std::string core = "marginal";  // marginal (default) | latent; latent when a model has effects
+  bool core_given = false;
   long particles = 1024;
   int threads = 0;  // 0 = all cores
   int older_sweeps = fleet::FleetSmc::Options{}.older_sweeps;  // latent core
@@ -39,9 +42,12 @@ struct FitFlags {
   void add_to(boost::program_options::options_description& desc);
 };
 
+// extension: the model's effects (null for the base model); fit_smc fits them on the latent core.
 fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records::WimRecord>& records,
-                              const FitFlags& flags, std::uint64_t seed, std::ostream* progress);
+                              const FitFlags& flags, std::uint64_t seed, std::ostream* progress,
+                              const fleet::ModelExtension* extension = nullptr);
 fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
-                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress);
+                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress,
+                               const fleet::ModelExtension* extension = nullptr);
 
 }  // namespace ssrfleet::cli

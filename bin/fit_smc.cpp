@@ -17,6 +17,10 @@ namespace po = boost::program_options;
 void FitFlags::add_to(po::options_description& desc) {
   po::options_description smc("SMC options");
   smc.add_options()
+      ("model", po::value(&model)->default_value(model),
+       "the model to fit: base, or effects joined by '+', each NAME or NAME:param=value,... (a parameter given is "
+       "fixed, one left out is fitted), e.g. tyre_damping+sensor_gain:sensor=11; effects need the latent core or "
+       "--method mcmc")
       ("core", po::value(&core)->default_value(core),
        "inference core: marginal (each truck's latents integrated out in a table built on arrival; IBIS over the "
        "7 hyperparameters, cost per truck flat in n) or latent (every truck's latents in every particle; needed for "
@@ -40,12 +44,23 @@ void FitFlags::add_to(po::options_description& desc) {
   desc.add(smc).add(mcmc);
 }
 
-fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t seed) {
+fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t seed,
+                                           const fleet::ModelExtension* extension) {
   fleet::OnlineFitOptions o;
   if (flags.core == "latent") {
     o.core = fleet::OnlineFitOptions::Core::kLatent;
   } else if (flags.core != "marginal") {
     throw UsageError("--core must be marginal or latent, not '" + flags.core + "'");
+  }
+  if (extension != nullptr) {
+    // The marginal core's tables integrate each truck's latents out for the base model's forward
+    // model; effects ride in the particles of the latent core.
+    if (flags.core_given && flags.core == "marginal") {
+      throw UsageError("--model " + extension->name() + ": the marginal core fits the base model only; effects need "
+                       "--core latent (the default with --model) or --method mcmc");
+    }
+    o.core = fleet::OnlineFitOptions::Core::kLatent;
+    o.latent.extension = extension;
   }
   if (flags.window < 0) throw UsageError("--window must be >= 0");
   if (flags.window > 0 && o.core == fleet::OnlineFitOptions::Core::kMarginal) {
@@ -67,8 +82,9 @@ fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t 
 }
 
 fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records::WimRecord>& records,
-                              const FitFlags& flags, std::uint64_t seed, std::ostream* progress) {
-  const fleet::OnlineFitOptions o = online_fit_options(flags, seed);
+                              const FitFlags& flags, std::uint64_t seed, std::ostream* progress,
+                              const fleet::ModelExtension* extension) {
+  fleet::OnlineFitOptions o = online_fit_options(flags, seed, extension);
   const int final_sweeps = flags.final_sweeps_given ? flags.final_sweeps : o.default_final_sweeps();
   auto smc = fleet::make_online_fit(site, o);
   const std::size_t n = records.size();

@@ -9,7 +9,7 @@
 namespace ssrfleet::fleet {
 
 PosteriorCloud to_posterior_cloud(const BatchMcmcResult& result, const site::Site& site,
-                                  const std::vector<records::WimRecord>& records) {
+                                  const std::vector<records::WimRecord>& records, const ModelExtension* extension) {
   PosteriorCloud c;
   c.method = "mcmc";
   c.theta = result.theta_draws.transpose();
@@ -32,6 +32,11 @@ PosteriorCloud to_posterior_cloud(const BatchMcmcResult& result, const site::Sit
   }
   c.ess = std::isfinite(ess) ? ess : static_cast<double>(draws);
   c.log_evidence = std::numeric_limits<double>::quiet_NaN();
+  if (extension != nullptr) {
+    c.model = extension->name();
+    for (const auto& p : extension->parameters()) c.psi_names.push_back(p.name);
+    c.psi = result.psi_draws.transpose();
+  }
   return c;
 }
 

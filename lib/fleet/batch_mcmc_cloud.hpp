@@ -14,8 +14,10 @@ namespace ssrfleet::fleet {
 
 // method "mcmc"; theta kHyperCount x kept draws; equal weights; ess = the smallest Geyer chain ESS
 // over the seven hyperparameters (the figure that limits every summary); log_evidence NaN (the
-// batch sampler does not estimate it).
+// batch sampler does not estimate it). With the extension the chain fitted: its name as the model
+// and its ψ draws.
 PosteriorCloud to_posterior_cloud(const BatchMcmcResult& result, const site::Site& site,
-                                  const std::vector<records::WimRecord>& records);
+                                  const std::vector<records::WimRecord>& records,
+                                  const ModelExtension* extension = nullptr);
 
 }  // namespace ssrfleet::fleet

@@ -121,7 +121,13 @@ void FleetSmc::restore(BinaryReader& in) {
 
 PosteriorCloud FleetSmc::cloud() const {
   auto [speeds, masses] = target_.observed_speeds_and_masses();
-  return smc_cloud(site_, sampler_, target_.theta(), std::move(speeds), std::move(masses), trucks_seen());
+  PosteriorCloud c = smc_cloud(site_, sampler_, target_.theta(), std::move(speeds), std::move(masses), trucks_seen());
+  if (const ModelExtension* e = target_.extension(); e != nullptr) {
+    c.model = e->name();
+    for (const auto& p : e->parameters()) c.psi_names.push_back(p.name);
+    c.psi = target_.psi();
+  }
+  return c;
 }
 
 }  // namespace ssrfleet::fleet

@@ -23,6 +23,12 @@ struct PosteriorCloud {
   long trucks_seen = 0;
   double ess = 0.0;
   double log_evidence = 0.0;      // log p(y_1:n), SMC only (NaN for MCMC)
+  // The model fitted (model/model_spec.hpp): "base", or a spec such as
+  // "tyre_damping+sensor_gain:sensor=11", and the draws of its free parameters ψ, one row per
+  // parameter (psi_names, the extension's parameter names), one column per draw (0 rows for base).
+  std::string model = "base";
+  std::vector<std::string> psi_names;
+  Eigen::MatrixXd psi;
 };
 
 }  // namespace ssrfleet::fleet

@@ -86,4 +86,9 @@ std::vector<ParameterSummary> summarise_cloud(const PosteriorCloud& cloud) {
   return summarise_weighted(cloud.theta, cloud.weights);
 }
 
+std::vector<ParameterSummary> summarise_psi(const PosteriorCloud& cloud) {
+  if (cloud.psi.rows() == 0) return {};
+  return summarise_weighted(cloud.psi, cloud.weights);
+}
+
 }  // namespace ssrfleet::fleet

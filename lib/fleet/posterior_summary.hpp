@@ -41,5 +41,7 @@ std::vector<ParameterSummary> summarise_weighted(const Eigen::Ref<const Eigen::M
 // cloud.theta (kHyperCount, fleet_model.hpp order), weighted by cloud.weights. Computed here so
 // that io/posterior_json only formats it.
 std::vector<ParameterSummary> summarise_cloud(const PosteriorCloud& cloud);
+// The same for the model extension's parameters: one entry per row of cloud.psi (none for base).
+std::vector<ParameterSummary> summarise_psi(const PosteriorCloud& cloud);
 
 }  // namespace ssrfleet::fleet

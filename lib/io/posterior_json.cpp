@@ -18,10 +18,16 @@ constexpr int kFormatVersion = 1;
 nlohmann::json number_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 }  // namespace
 
-nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vector<fleet::ParameterSummary>& hyper) {
+nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vector<fleet::ParameterSummary>& hyper,
+                                 const std::vector<fleet::ParameterSummary>& psi) {
   if (hyper.size() != static_cast<std::size_t>(fleet::kHyperCount)) {
     throw std::invalid_argument("io::posterior_to_json(): " + std::to_string(hyper.size()) + " summaries for " +
                                 std::to_string(fleet::kHyperCount) + " hyperparameters");
+  }
+  if (psi.size() != static_cast<std::size_t>(c.psi.rows()) || c.psi_names.size() != psi.size()) {
+    throw std::invalid_argument("io::posterior_to_json(): " + std::to_string(psi.size()) + " summaries and " +
+                                std::to_string(c.psi_names.size()) + " names for " + std::to_string(c.psi.rows()) +
+                                " extension parameters");
   }
   nlohmann::json j;
   for (int h = 0; h < fleet::kHyperCount; ++h) {
@@ -34,6 +40,14 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vect
   j["ess"] = c.ess;
   j["log_evidence"] = number_or_null(c.log_evidence);
   j["method"] = c.method;
+  j["model"] = c.model;
+  if (!psi.empty()) {
+    nlohmann::json e = nlohmann::json::object();
+    for (std::size_t k = 0; k < psi.size(); ++k) {
+      e[c.psi_names[k]] = {{"mean", psi[k].mean}, {"sd", psi[k].sd}, {"q025", psi[k].q025}, {"q975", psi[k].q975}};
+    }
+    j["extension"] = std::move(e);
+  }
   j["format_version"] = kFormatVersion;
   j["site"] = {{"fingerprint", c.site_fingerprint}, {"road", c.road_name}, {"sensors", c.sensors},
                {"lateral_min_m", c.lateral_min_m}, {"lateral_max_m", c.lateral_max_m}};
@@ -47,12 +61,23 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vect
                 {"theta", std::move(theta)},
                 {"speed_mps", c.speed_mps},
                 {"sprung_mass_kg", c.sprung_mass_kg}};
+  if (c.psi.rows() > 0) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (Eigen::Index i = 0; i < c.psi.cols(); ++i) {
+      nlohmann::json row = nlohmann::json::array();
+      for (Eigen::Index k = 0; k < c.psi.rows(); ++k) row.push_back(c.psi(k, i));
+      rows.push_back(std::move(row));
+    }
+    j["cloud"]["psi"] = std::move(rows);
+    j["cloud"]["psi_names"] = c.psi_names;  // the rows' order (JSON objects have none)
+  }
   return j;
 }
 
 void write_posterior_file(const std::string& path, const fleet::PosteriorCloud& cloud,
-                          const std::vector<fleet::ParameterSummary>& hyper) {
-  const nlohmann::json j = posterior_to_json(cloud, hyper);
+                          const std::vector<fleet::ParameterSummary>& hyper,
+                          const std::vector<fleet::ParameterSummary>& psi) {
+  const nlohmann::json j = posterior_to_json(cloud, hyper, psi);
   write_file_atomically(path, [&](std::ostream& os) { os << j.dump(1) << "\n"; });
 }
 
@@ -130,6 +155,28 @@ fleet::PosteriorCloud read_posterior_file(const std::string& path_in) {
   }
   if (!(total > 0.0)) throw DataError(path, 0, "cloud.weights", "all weights are zero");
   c.weights /= total;
+  // The model: files written before models existed are the base model's.
+  c.model = j.contains("model") ? get_field<std::string>(j, "model", path, "") : "base";
+  if (c.model.empty()) throw DataError(path, 0, "model", "is empty (\"base\" or a model spec)");
+  if (c.model != "base" && cloud.contains("psi")) {  // none when the spec fixes every parameter
+    c.psi_names = get_field<std::vector<std::string>>(cloud, "psi_names", path, "cloud.");
+    if (c.psi_names.empty()) throw DataError(path, 0, "cloud.psi_names", "empty for model '" + c.model + "'");
+    const auto rows = get_field<std::vector<std::vector<double>>>(cloud, "psi", path, "cloud.");
+    if (rows.size() != weights.size()) {
+      throw DataError(path, 0, "cloud.psi", "needs one row per weight (" + std::to_string(weights.size()) + ")");
+    }
+    c.psi.resize(static_cast<Eigen::Index>(c.psi_names.size()), static_cast<Eigen::Index>(rows.size()));
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      if (rows[i].size() != c.psi_names.size()) {
+        throw DataError(path, 0, "cloud.psi[" + std::to_string(i) + "]",
+                        "needs " + std::to_string(c.psi_names.size()) + " values (one per extension parameter)");
+      }
+      for (std::size_t k = 0; k < rows[i].size(); ++k) {
+        if (!std::isfinite(rows[i][k])) throw DataError(path, 0, "cloud.psi[" + std::to_string(i) + "]", "holds a non-finite number");
+        c.psi(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(i)) = rows[i][k];
+      }
+    }
+  }
   return c;
 }
 

@@ -15,9 +15,14 @@
 namespace ssrfleet::io {
 
 // The whole file as JSON (summary + cloud). `hyper` is fleet::summarise_cloud(cloud): one entry
-// per hyperparameter (fleet_model.hpp order); another length is std::invalid_argument.
+// per hyperparameter (fleet_model.hpp order); `psi` is fleet::summarise_psi(cloud), one entry per
+// extension parameter (none for the base model); another length is std::invalid_argument.
+// The model is recorded as "model" (its spec), with the extension's parameters summarised under
+// "extension" by name, and their draws as cloud.psi (one row per draw, like cloud.theta; the
+// columns' names in cloud.psi_names). A model whose parameters are all fixed has no ψ draws.
 nlohmann::json posterior_to_json(const fleet::PosteriorCloud& cloud,
-                                 const std::vector<fleet::ParameterSummary>& hyper);
+                                 const std::vector<fleet::ParameterSummary>& hyper,
+                                 const std::vector<fleet::ParameterSummary>& psi = {});
 
 // Reads a posterior file, or the file `posterior.json` inside a directory (a stream's state
 // directory). Any missing or malformed field is a DataError naming the file and the field; a
@@ -25,6 +30,7 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& cloud,
 fleet::PosteriorCloud read_posterior_file(const std::string& path);
 
 void write_posterior_file(const std::string& path, const fleet::PosteriorCloud& cloud,
-                          const std::vector<fleet::ParameterSummary>& hyper);
+                          const std::vector<fleet::ParameterSummary>& hyper,
+                          const std::vector<fleet::ParameterSummary>& psi = {});
 
 }  // namespace ssrfleet::io

@@ -20,7 +20,8 @@ PassSetup base_pass(const site::Site& site, double speed_mps, double sprung_mass
 }
 
 void simulate_passes(const site::Site& site, const ModelExtension* extension, const std::vector<ExtendedPass>& passes,
-                     Eigen::Ref<Eigen::ArrayXXd> if_out, Eigen::ArrayXd* min_if) {
+                     Eigen::Ref<Eigen::ArrayXXd> if_out, Eigen::ArrayXd* min_if,
+                     const vehicle::PassIntegrator* other_integrator) {
   const auto n = static_cast<Eigen::Index>(passes.size());
   if (n == 0) return;
   if (extension != nullptr && !extension->edits_forward()) extension = nullptr;  // e.g. second_class
@@ -47,7 +48,7 @@ void simulate_passes(const site::Site& site, const ModelExtension* extension, co
     speed[i] = s.speed_mps;
     paths.push_back(site.wheel_path(s.lateral_m));
   }
-  const auto& integrator = site.integrator();
+  const auto& integrator = other_integrator != nullptr ? *other_integrator : site.integrator();
   integrator.run_batch(cars, speed, paths, if_out, min_if);
   if (extension == nullptr) return;
 

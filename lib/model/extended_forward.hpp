@@ -28,7 +28,10 @@ PassSetup base_pass(const site::Site& site, double speed_mps, double sprung_mass
 // (ModelExtension::edits_forward() false) is the base model here.
 // min_if (if given) gets each pass's minimum IF over the road with the extension's pass edits but
 // without an added profile (a defect's own dip is not in it).
+// integrator: one built for other output positions on the site's surface (predict anywhere);
+// null = the site's own (its sensors).
 void simulate_passes(const site::Site& site, const ModelExtension* extension, const std::vector<ExtendedPass>& passes,
-                     Eigen::Ref<Eigen::ArrayXXd> if_out, Eigen::ArrayXd* min_if = nullptr);
+                     Eigen::Ref<Eigen::ArrayXXd> if_out, Eigen::ArrayXd* min_if = nullptr,
+                     const vehicle::PassIntegrator* integrator = nullptr);
 
 }  // namespace ssrfleet::fleet

@@ -10,8 +10,11 @@
 #include <boost/random/uniform_01.hpp>
 #include <boost/random/uniform_int_distribution.hpp>
 
+#include "model/extended_forward.hpp"
 #include "model/fleet_model.hpp"
+#include "model/model_spec.hpp"
 #include "model/truncated_samplers.hpp"
+#include "predict/physical_effects.hpp"
 #include "util/errors.hpp"
 #include "util/quantile.hpp"
 
@@ -65,12 +68,38 @@ SsrPrediction predict_ssr(const fleet::PosteriorCloud& posterior, const site::Si
       posterior.weights.size() != posterior.theta.cols() || posterior.speed_mps.empty()) {
     throw UsageError("predict: the posterior holds no usable draws");
   }
+  // The fitted model's effects, rebuilt for this site from the posterior's spec; the force the
+  // road feels keeps only some of them (physical_effects.hpp).
+  fleet::ModelSpec model;
+  if (posterior.model != "base") {
+    try {
+      model = fleet::parse_model_spec(posterior.model, site);
+    } catch (const UsageError& e) {
+      throw UsageError(std::string("predict: the posterior's model cannot be rebuilt on this site: ") + e.what());
+    }
+    if (model.extension->dim() != posterior.psi.rows() ||
+        (posterior.psi.rows() > 0 && posterior.psi.cols() != posterior.theta.cols())) {
+      throw UsageError("predict: the posterior's model '" + posterior.model + "' has " +
+                       std::to_string(model.extension->dim()) + " free parameters, its draws " +
+                       std::to_string(posterior.psi.rows()) + " rows of psi for " +
+                       std::to_string(posterior.psi.cols()) + " of " + std::to_string(posterior.theta.cols()) + " draws");
+    }
+  }
+  // The draw's ψ (none when the spec fixes every parameter).
+  const auto psi_of = [&](Eigen::Index draw) -> const double* {
+    return posterior.psi.rows() > 0 ? posterior.psi.col(draw).data() : nullptr;
+  };
+  std::unique_ptr<PhysicalEffects> effects;
+  if (model.extension) effects = std::make_unique<PhysicalEffects>(*model.extension, posterior.site_fingerprint == site.fingerprint());
   if (positions_m.empty()) positions_m = site.sensor_positions_m();
   const vehicle::PassIntegrator integrator(site.surface().dx_m, site.surface().samples(), positions_m);
   const auto n_pos = static_cast<Eigen::Index>(positions_m.size());
   const int R = options.theta_draws, T = options.trucks_per_draw;
 
   boost::random::mt19937_64 engine(options.seed);
+  // The class of each truck under an extension's stiffness distribution comes from an engine of
+  // its own, so the base model's draws (and the noise) stay those of a prediction without it.
+  boost::random::mt19937_64 class_engine(options.seed ^ 0x5bd1e995u);
   boost::random::uniform_01<double> unif;
   boost::random::normal_distribution<double> std_normal(0.0, 1.0);
   const auto thetas = draw_by_weight(posterior.weights, R, unif(engine));
@@ -113,13 +142,31 @@ SsrPrediction predict_ssr(const fleet::PosteriorCloud& posterior, const site::Si
           n_obs - 1, std::upper_bound(traffic_cdf.begin(), traffic_cdf.end(), u_obs[i] * total) - traffic_cdf.begin());
       batch.speed_mps[b] = posterior.speed_mps[obs];
       batch.sprung_mass_kg[b] = posterior.sprung_mass_kg[obs];
-      batch.stiffness_npm[b] = fleet::truncated_normal_quantile(u_k[i], th(fleet::kK), th(fleet::kSigmaK), 0.0, inf);
+      if (effects && effects->edits_stiffness_distribution()) {
+        // The extension's distribution from the same stratified uniform (its class from its own).
+        const double z = fleet::truncated_normal_quantile(u_k[i], 0.0, 1.0, -inf, inf);
+        batch.stiffness_npm[b] = effects->draw_stiffness(psi_of(p), th(fleet::kK), th(fleet::kSigmaK),
+                                                         fleet::uniform_open01(class_engine), z);
+      } else {
+        batch.stiffness_npm[b] = fleet::truncated_normal_quantile(u_k[i], th(fleet::kK), th(fleet::kSigmaK), 0.0, inf);
+      }
       batch.tyre_stiffness_npm[b] = fleet::truncated_normal_quantile(u_kt[i], th(fleet::kKt), th(fleet::kSigmaKt), 0.0, inf);
       batch.lateral_m[b] = fleet::truncated_normal_quantile(u_z[i], th(fleet::kZ), th(fleet::kSigmaZ), zlo, zhi);
     }
   }
   Eigen::ArrayXXd model_if(n_pos, batch.size());
-  site.impact_factors_at(integrator, batch, model_if);
+  if (effects && effects->edits_forward()) {
+    std::vector<fleet::ExtendedPass> passes(static_cast<std::size_t>(batch.size()));
+    for (Eigen::Index b = 0; b < batch.size(); ++b) {
+      auto& pass = passes[static_cast<std::size_t>(b)];
+      pass.setup = fleet::base_pass(site, batch.speed_mps[b], batch.sprung_mass_kg[b], batch.stiffness_npm[b],
+                                    batch.tyre_stiffness_npm[b], batch.lateral_m[b]);
+      pass.psi = psi_of(thetas[static_cast<std::size_t>(b / T)]);
+    }
+    fleet::simulate_passes(site, effects.get(), passes, model_if, nullptr, &integrator);
+  } else {
+    site.impact_factors_at(integrator, batch, model_if);
+  }
 
   SsrPrediction out;
   out.position_m = positions_m;

@@ -1,0 +1,46 @@
+// What of a fitted model's effects a prediction of the tyre forces keeps (issue 17: predict uses
+// the extended posterior). The SSR prediction is of the force the road feels, so:
+//   - the vehicle and the traffic (edit_pass: damping, unsprung mass, the true speed behind a
+//     biased logged one) are kept, on every road;
+//   - a height the road file lacks (add_profile: profile_defect) is kept on the road it was
+//     fitted on only: another road does not have that defect;
+//   - what the sensors report (edit_output: a calibration gain) is dropped: it is the instrument,
+//     not the force. Its being fitted is what keeps θ, and so the prediction, unbiased;
+//   - a replaced stiffness distribution (second_class) is the fleet's and is kept; predict_ssr
+//     draws k from it.
+#pragma once
+
+#include "model/model_extension.hpp"
+
+namespace ssrfleet::predict {
+
+class PhysicalEffects final : public fleet::ModelExtension {
+ public:
+  // inner: the fitted model's extension (outlives this); on_fitted_road: the prediction's site is
+  // the one the posterior was fitted on.
+  PhysicalEffects(const fleet::ModelExtension& inner, bool on_fitted_road) : inner_(inner), on_fitted_road_(on_fitted_road) {}
+
+  std::string name() const override { return inner_.name(); }
+  std::string description() const override { return inner_.description(); }
+  const std::vector<fleet::ExtensionParameter>& parameters() const override { return inner_.parameters(); }
+  std::vector<fleet::CheckKind> signature() const override { return inner_.signature(); }
+
+  void edit_pass(const double* psi, fleet::PassSetup& pass) const override { inner_.edit_pass(psi, pass); }
+  bool adds_profile() const override { return on_fitted_road_ && inner_.adds_profile(); }
+  void add_profile(const double* psi, double dx_m, Eigen::Ref<Eigen::ArrayXd> profile) const override {
+    if (adds_profile()) inner_.add_profile(psi, dx_m, profile);
+  }
+  bool edits_forward() const override { return inner_.edits_forward(); }
+
+  bool edits_stiffness_distribution() const override { return inner_.edits_stiffness_distribution(); }
+  double draw_stiffness(const double* psi, double mean_npm, double sd_npm, double uniform,
+                        double standard_normal) const override {
+    return inner_.draw_stiffness(psi, mean_npm, sd_npm, uniform, standard_normal);
+  }
+
+ private:
+  const fleet::ModelExtension& inner_;
+  bool on_fitted_road_;
+};
+
+}  // namespace ssrfleet::predict
