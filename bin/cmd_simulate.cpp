@@ -10,6 +10,7 @@
 #include "fleet/simulator.hpp"
 #include "io/truck_list_csv.hpp"
 #include "io/wim_log.hpp"
+#include "model/model_spec.hpp"
 #include "model/fleet_distribution.hpp"
 #include "site/road_source.hpp"
 #include "util/errors.hpp"
@@ -38,9 +39,11 @@ int run_simulate(int argc, const char* const argv[]) {
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (fleet draw and noise)")
       ("out,o", po::value(&out)->default_value(out), "WIM log to write ('-' = standard output)")
       ("truth", po::value(&truth), "also write the simulated trucks as they drove (truck-list CSV; with second_class, its stiffnesses) here")
-      ("effect", po::value(&effect),
-       "switch on an effect the base model leaves out, NAME:param=value,... (e.g. sensor_gain:sensor=5,gain=1.05; "
-       "see `ssrfleet diagnose --help` for the catalogue)")
+      ("model", po::value(&effect),
+       "simulate with effects the base model leaves out: effects joined by '+', each NAME:param=value,... with every "
+       "parameter given (e.g. sensor_gain:sensor=5,gain=1.05+tyre_damping:c_t=400; see `ssrfleet diagnose --help` for "
+       "the catalogue)")
+      ("effect", po::value(&effect), "the same as --model (one effect or several joined by '+')")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   site_flags.add_to(desc);
   po::options_description fleet_desc("fleet distribution (paper Table 1 defaults)");
@@ -74,15 +77,14 @@ int run_simulate(int argc, const char* const argv[]) {
   } else {
     trucks = io::read_truck_list_file(trucks_arg, site.lateral_min_m(), site.lateral_max_m());
   }
-  fleet::ExtensionSetting setting;
-  if (!effect.empty()) setting = fleet::parse_extension_setting(effect, site);
+  const fleet::SimulationModel setting = fleet::parse_simulation_model(effect, site);
   const fleet::SimulatedLog log = setting.extension ? fleet::simulate_log(site, trucks, noise, seed, *setting.extension, setting.psi)
                                                     : fleet::simulate_log(site, trucks, noise, seed);
 
   write_output(out, [&](std::ostream& os) {
     os << "# ssrfleet " << SSRFLEET_VERSION << " simulate: road " << site.surface().name << ", "
        << trucks.size() << " trucks, noise " << noise << ", seed " << seed << ", site " << site.fingerprint()
-       << (effect.empty() ? "" : ", effect ") << effect << "\n";
+       << (setting.extension ? ", model " + setting.text : "") << "\n";
     io::write_wim_log(os, log.records);
   });
   if (!truth.empty()) write_output(truth, [&](std::ostream& os) { io::write_truck_list(os, log.trucks); });

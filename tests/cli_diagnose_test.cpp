@@ -21,7 +21,7 @@ TEST_CASE("diagnose on a small log writes the JSON report and the per-sensor fil
   const auto sim = run_ssrfleet("simulate --trucks 12 --seed 4 --quiet --effect sensor_gain:sensor=3,gain=1.1 --out " + q(log), dir);
   INFO(sim.err);
   REQUIRE(sim.status == 0);
-  CHECK(test::read_text(log).find("effect sensor_gain:sensor=3,gain=1.1") != std::string::npos);  // in the header comment
+  CHECK(test::read_text(log).find("model sensor_gain:sensor=3,gain=1.1") != std::string::npos);  // in the header comment
   const auto r = run_ssrfleet("diagnose " + q(log) + " --particles 64 --draws 20 --candidates sensor_gain --no-plots --json " +
                                   q(dir.file("report.json")) + " --out " + q(dir.file("diag")),
                               dir);
@@ -46,11 +46,12 @@ TEST_CASE("diagnose and simulate --effect refuse bad input with a clear message 
 
   auto r = run_ssrfleet("simulate --trucks 5 --effect wind:speed=3 --quiet --out " + q(dir.file("w.csv")), dir);
   CHECK(r.status == 64);
-  CHECK(r.err.find("unknown model extension 'wind'") != std::string::npos);
+  CHECK(r.err.find("unknown effect 'wind'") != std::string::npos);
+  CHECK(r.err.find("  sensor_gain: ") != std::string::npos);  // the catalogue
   CHECK(!std::filesystem::exists(dir.file("w.csv")));
   r = run_ssrfleet("simulate --trucks 5 --effect tyre_damping:c_t=-3 --quiet --out " + q(dir.file("w.csv")), dir);
   CHECK(r.status == 64);
-  CHECK(r.err.find("c_t must be a number in [0, 10000]") != std::string::npos);
+  CHECK(r.err.find("tyre_damping.c_t = '-3' must be a number in [0, 10000]") != std::string::npos);
 
   r = run_ssrfleet("diagnose " + q(dir.file("missing.csv")), dir);
   CHECK(r.status == 66);

@@ -83,3 +83,28 @@ TEST_CASE("ssrfleet simulate refuses bad input with file line and field and leav
     CHECK_FALSE(std::filesystem::exists(out));
   }
 }
+
+TEST_CASE("simulate --model switches on several effects at once and needs every parameter", "[cli][extension]") {
+  test::TempDir dir;
+  const auto one = run_ssrfleet("simulate --trucks 5 --seed 2 --noise 0 --quiet --model speed_bias:factor=1.1 --out '" +
+                                     dir.file("one.csv") + "'", dir);
+  const auto two = run_ssrfleet("simulate --trucks 5 --seed 2 --noise 0 --quiet --out '" + dir.file("two.csv") +
+                                     "' --model speed_bias:factor=1.1+sensor_gain:sensor=4,gain=1.05", dir);
+  INFO(two.err);
+  REQUIRE(one.status == 0);
+  REQUIRE(two.status == 0);
+  CHECK(test::read_text(dir.file("two.csv")).find("model speed_bias:factor=1.1+sensor_gain:sensor=4,gain=1.05") !=
+        std::string::npos);
+  // Sensor 4 reads 1.05 times what it reads with the speed bias alone; the others the same.
+  const auto a = io::read_wim_log_file(dir.file("one.csv"), 420.0), b = io::read_wim_log_file(dir.file("two.csv"), 420.0);
+  REQUIRE(a.size() == 5);
+  REQUIRE(b.size() == 5);
+  for (std::size_t t = 0; t < a.size(); ++t) {
+    for (Eigen::Index s = 0; s < a[t].impact_factor.size(); ++s) {
+      CHECK(b[t].impact_factor[s] == Approx(a[t].impact_factor[s] * (s == 3 ? 1.05 : 1.0)).epsilon(1e-8));
+    }
+  }
+  const auto missing = run_ssrfleet("simulate --trucks 5 --quiet --model speed_bias+sensor_gain:sensor=4", dir);
+  CHECK(missing.status != 0);
+  CHECK(missing.err.find("missing: speed_bias.factor, sensor_gain.gain") != std::string::npos);
+}
