@@ -10,6 +10,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "model/model_spec.hpp"
 #include "site/road_source.hpp"
 #include "stream/wim_stream.hpp"
 #include "util/errors.hpp"
@@ -33,7 +34,7 @@ void install_stop_handlers() {
 }  // namespace
 
 int run_stream(int argc, const char* const argv[]) {
-  std::string road = "AS1", input = "-", seed_text = "1";
+  std::string road = "AS1", input = "-", seed_text = "1", model_text = "base";
   bool quiet = false;
   long particles = 1024;
   int threads = 0;
@@ -51,6 +52,9 @@ int run_stream(int argc, const char* const argv[]) {
       ("particles", po::value(&particles)->default_value(particles), "number of particles P (>= 2)")
       ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (a resume must use the same one)")
+      ("model", po::value(&model_text)->default_value(model_text),
+       "the model to fit: base, or effects joined by '+', each NAME or NAME:param=value,... (a parameter given is "
+       "fixed, one left out is fitted); effects run on the exact latent core; a resume must use the same model")
       ("window", po::value(&options.fit.latent.window)->default_value(0),
        "bounded memory on the latent core: keep and move only the last W trucks' latents, older ones as sufficient "
        "statistics (0 = the default exact marginal core, whose memory per truck is a table of a few KB)")
@@ -63,6 +67,17 @@ int run_stream(int argc, const char* const argv[]) {
   }
   if (options.fit.latent.window < 0) throw UsageError("--window must be >= 0");
   if (options.fit.latent.window > 0) options.fit.core = fleet::OnlineFitOptions::Core::kLatent;
+  // The core is chosen before the sampler options go to it (sampler() is the chosen core's).
+  const site::Site site(site::load_road(road), site_flags.to_options());
+  const fleet::ModelSpec model = fleet::parse_model_spec(model_text, site);
+  if (model.extension) {
+    if (options.fit.latent.window > 0) {
+      throw UsageError("--model " + model.text + " needs the exact latent core: a truck that left the --window cannot "
+                       "be re-simulated at new effect parameters");
+    }
+    options.fit.core = fleet::OnlineFitOptions::Core::kLatent;
+    options.fit.latent.extension = model.extension.get();
+  }
   options.fit.sampler().particles = particles;
   options.fit.sampler().threads = threads > 0 ? threads : smc::TemperedSampler::Options::default_threads();
   options.fit.sampler().seed = parse_seed(seed_text);
@@ -70,7 +85,6 @@ int run_stream(int argc, const char* const argv[]) {
   if (!options.fit.sampler().IsValid(&why)) throw UsageError(why);
   if (options.follow && input == "-") throw UsageError("--follow needs --input FILE (standard input follows by itself)");
 
-  const site::Site site(site::load_road(road), site_flags.to_options());
   install_stop_handlers();
   stream::WimStream stream(site, options, quiet ? nullptr : &std::cerr, std::cout);
   std::ifstream file;

@@ -296,3 +296,33 @@ TEST_CASE("the stream checkpoint keeps its size while the truck log grows and a 
   CHECK(r.err.find("checkpoint.bin") != std::string::npos);
   CHECK_FALSE(std::filesystem::exists(old_state + "/posterior.json"));
 }
+
+TEST_CASE("a stream fits a model, records it in its state, and refuses to resume with another", "[cli][stream][extension]") {
+  test::TempDir dir;
+  const std::string log = dir.file("log.csv");
+  REQUIRE(run_ssrfleet("simulate --trucks 6 --seed 8 --quiet --effect speed_bias:factor=1.1 --out " + q(log), dir).status == 0);
+  // The same posterior as fit with the same model (fit's final sweeps off, as a stream has none).
+  REQUIRE(run_ssrfleet("fit " + q(log) + " --model speed_bias --particles 64 --seed 4 --final-sweeps 0 --quiet --out " +
+                           q(dir.file("fit.json")), dir)
+              .status == 0);
+  const std::string state = dir.file("state");
+  const auto r = run_ssrfleet("stream --state " + q(state) + " --input " + q(log) +
+                                  " --model speed_bias --particles 64 --seed 4 --quiet", dir);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  CHECK(test::read_text(dir.file("fit.json")) == test::read_text(state + "/posterior.json"));
+  CHECK(test::read_text(state + "/posterior.json").find("\"model\": \"speed_bias\"") != std::string::npos);
+  // A resume with the same model skips what it has; another model is refused, the state untouched.
+  const std::string before = test::read_text(state + "/posterior.json");
+  const auto same = run_ssrfleet("stream --state " + q(state) + " --input " + q(log) +
+                                     " --model speed_bias --particles 64 --seed 4 --quiet", dir);
+  CHECK(same.status == 0);
+  const auto other = run_ssrfleet("stream --state " + q(state) + " --input " + q(log) + " --particles 64 --seed 4 --quiet", dir);
+  CHECK(other.status != 0);
+  CHECK(other.err.find("the state was written with --model speed_bias") != std::string::npos);
+  CHECK(test::read_text(state + "/posterior.json") == before);
+  const auto windowed = run_ssrfleet("stream --state " + q(dir.file("w")) + " --input " + q(log) +
+                                         " --model speed_bias --window 3 --quiet", dir);
+  CHECK(windowed.status != 0);
+  CHECK(windowed.err.find("needs the exact latent core") != std::string::npos);
+}

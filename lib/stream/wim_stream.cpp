@@ -21,10 +21,11 @@ namespace fs = std::filesystem;
 
 namespace {
 std::string path_in(const std::string& dir, const char* name) { return (fs::path(dir) / name).string(); }
-// The stream checkpoint's header (version 2: bookkeeping first, then the core's state, with the
-// marginal core's truck log beside it). Version 1 began with the core's own magic word.
+// The stream checkpoint's header (bookkeeping first, then the core's state, with the marginal
+// core's truck log beside it). Version 3 records the model after the source; version 2, the same
+// without it, is read as the base model's; version 1 began with the core's own magic word.
 constexpr std::uint64_t kStreamMagic = 0x4d52545346525353ULL;       // "SSRFSTRM"
-constexpr std::uint32_t kStreamVersion = 2;
+constexpr std::uint32_t kStreamVersion = 3;
 constexpr std::uint64_t kOldCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
 }  // namespace
 
@@ -49,11 +50,16 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   }
   if (magic != kStreamMagic) reader.fail("magic", "not an ssrfleet stream checkpoint");
   const auto version = reader.value<std::uint32_t>("version");
-  if (version != kStreamVersion) {
-    reader.fail("version", "stream state format version " + std::to_string(version) + ", this build reads " +
+  if (version != kStreamVersion && version != 2) {
+    reader.fail("version", "stream state format version " + std::to_string(version) + ", this build reads 2 and " +
                                std::to_string(kStreamVersion));
   }
   checkpoint_source_ = reader.text("source");
+  const std::string state_model = version >= 3 ? reader.text("model") : "base";
+  if (state_model != model_text()) {
+    reader.fail("model", "the state was written with --model " + state_model + "; resume it with the same model (this "
+                         "run asks for " + model_text() + ")");
+  }
   checkpoint_lines_ = reader.value<std::uint64_t>("lines_consumed");
   rejects_bytes_ = reader.value<std::uint64_t>("rejects_bytes");
   const bool split = reader.value<std::uint8_t>("split") != 0;
@@ -116,6 +122,7 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
     out.value(kStreamMagic);
     out.value(kStreamVersion);
     out.text(source);
+    out.text(model_text());
     out.value<std::uint64_t>(lines_consumed);
     out.value<std::uint64_t>(rejects_bytes_);
     out.value<std::uint8_t>(smc_->splits_state() ? 1 : 0);
@@ -125,7 +132,8 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
     smc_->save_state(out);
   });
   const fleet::PosteriorCloud cloud = smc_->cloud();
-  io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), cloud, fleet::summarise_cloud(cloud));
+  io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), cloud, fleet::summarise_cloud(cloud),
+                           fleet::summarise_psi(cloud));
 }
 
 void WimStream::report() const {

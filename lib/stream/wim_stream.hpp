@@ -39,7 +39,9 @@ struct StreamOptions {
   int report_every = 0;         // print the SSR table every N absorbed trucks (0 = only at the end)
   bool follow = false;          // at end of input, wait for more (like tail -f) until stopped
   double follow_poll_s = 0.25;  // how often to look for more input in follow mode
-  fleet::OnlineFitOptions fit;  // the core (marginal by default) and its sampler options
+  // The core (marginal by default) and its sampler options; fit.latent.extension: the model's
+  // effects (model_spec.hpp; on the latent core), recorded in the state by name.
+  fleet::OnlineFitOptions fit;
   predict::PredictionOptions prediction;
 };
 
@@ -66,6 +68,10 @@ class WimStream {
   StreamCounts run(std::istream& in, const std::string& source, const std::atomic<bool>& stop);
 
  private:
+  // The model's spec as the state records it: "base" or the extension's name.
+  std::string model_text() const {
+    return options_.fit.latent.extension != nullptr ? options_.fit.latent.extension->name() : "base";
+  }
   void save_state(const std::string& source, std::size_t lines_consumed);
   void report() const;
 
