@@ -8,6 +8,8 @@
 #include "commands.hpp"
 #include "discrepancy/diagnose.hpp"
 #include "discrepancy/diagnose_report.hpp"
+#include "fleet/posterior_summary.hpp"
+#include "io/posterior_json.hpp"
 #include "io/wim_log.hpp"
 #include "model/model_extension.hpp"
 #include "site/road_source.hpp"
@@ -17,7 +19,7 @@
 namespace ssrfleet::cli {
 
 int run_diagnose(int argc, const char* const argv[]) {
-  std::string log_path, road = "AS1", json_path, out_dir, seed_text = "1", candidates;
+  std::string log_path, road = "AS1", json_path, out_dir, seed_text = "1", candidates, posterior_path;
   discrepancy::DiagnoseOptions o;
   int threads = 0;
   bool quiet = false, no_plots = false;
@@ -33,7 +35,9 @@ int run_diagnose(int argc, const char* const argv[]) {
       ("log", po::value(&log_path)->required(), "WIM log (CSV) to diagnose")
       ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3 or a road CSV file")
       ("json", po::value(&json_path), "write the JSON report here ('-' = standard output)")
-      ("out,o", po::value(&out_dir), "folder for the report, per-sensor CSVs and plots")
+      ("out,o", po::value(&out_dir), "folder for the report, per-sensor CSVs, plots and posterior.json (the posterior it ends with)")
+      ("posterior", po::value(&posterior_path),
+       "write the posterior diagnose ends with (the chosen effect's model, or the base model) here, ready for predict")
       ("particles", po::value(&o.particles)->default_value(o.particles), "SMC particles per fit (>= 2)")
       ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
@@ -74,6 +78,14 @@ int run_diagnose(int argc, const char* const argv[]) {
   const auto result = discrepancy::diagnose(site, records, o);
   if (!json_path.empty()) {
     write_output(json_path, [&](std::ostream& os) { os << discrepancy::diagnosis_to_json(result).dump(1) << "\n"; });
+  }
+  if (!posterior_path.empty()) {
+    write_output(posterior_path, [&](std::ostream& os) {
+      os << io::posterior_to_json(result.posterior, fleet::summarise_cloud(result.posterior),
+                                  fleet::summarise_psi(result.posterior))
+                .dump(1)
+         << "\n";
+    });
   }
   if (!out_dir.empty()) {
     bool plotted = false;

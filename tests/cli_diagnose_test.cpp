@@ -33,10 +33,19 @@ TEST_CASE("diagnose on a small log writes the JSON report and the per-sensor fil
   CHECK(j.contains("effect"));
   CHECK(j["candidates"].size() == 1);
   for (const char* f : {"summary.md", "report.json", "residual_pattern.csv", "per_sensor_checks.csv", "checks.csv",
-                        "residual_pattern.gp", "checks.gp"}) {
+                        "residual_pattern.gp", "checks.gp", "posterior.json"}) {
     INFO(f);
     CHECK(std::filesystem::exists(dir.path() / "diag" / f));
   }
+  // The posterior diagnose ends with is the chosen effect's model (or the base), and predict takes it.
+  const auto post = nlohmann::json::parse(test::read_text((dir.path() / "diag" / "posterior.json").string()));
+  const std::string effect = j["effect"].get<std::string>();
+  CHECK(post["model"] == (effect == "none" ? std::string("base") : effect));
+  if (effect != "none") CHECK(post["extension"].size() == 2);  // sensor_gain's sensor and gain
+  const auto pred = run_ssrfleet("predict --posterior " + q((dir.path() / "diag" / "posterior.json").string()) +
+                                     " --draws 10 --trucks-per-draw 10 --quiet", dir);
+  INFO(pred.err);
+  CHECK(pred.status == 0);
 }
 
 TEST_CASE("diagnose and simulate --effect refuse bad input with a clear message and exit status", "[cli][diagnose]") {

@@ -232,6 +232,7 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
     r.chosen = best.fit;
     say("posterior predictive checks with " + r.effect);
     r.checks_after = check(site, best, o);
+    r.posterior = best.online->cloud();
   } else {
     const bool any_failed = std::any_of(r.checks_before.checks.begin(), r.checks_before.checks.end(),
                                         [](const CheckResult& c) { return c.flagged; });
@@ -240,6 +241,7 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
                                  "better than the base model: nothing is missing that these data can reveal";
     r.chosen = r.base;
     r.checks_after = r.checks_before;
+    r.posterior = base.online->cloud();
   }
   r.wall_s = seconds_since(start);
   return r;

@@ -93,6 +93,9 @@ struct DiagnoseResult {
   std::vector<CandidateResult> candidates;
   double alpha = 0.01, min_log_bayes_factor = 3.0;
   double wall_s = 0.0;
+  // The posterior diagnose ends with: the chosen effect's model (its "model" names the effect),
+  // or the base model's; a posterior file of it is ready for predict.
+  fleet::PosteriorCloud posterior;
 };
 
 // records: the WIM log, in arrival order; its sensor count must be the site's (DataError).

@@ -7,6 +7,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/gnuplot_runner.hpp"
+#include "io/posterior_json.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::discrepancy {
@@ -241,6 +242,13 @@ std::vector<std::string> write_diagnosis_files(const std::string& dir, const Dia
     io::write_file_atomically((std::filesystem::path(dir) / name).string(), body);
     files.push_back(name);
   };
+  // The posterior diagnose ends with, ready for predict (the chosen effect's model, or the base).
+  if (r.posterior.theta.cols() > 0) {
+    write("posterior.json", [&](std::ostream& os) {
+      os << io::posterior_to_json(r.posterior, fleet::summarise_cloud(r.posterior), fleet::summarise_psi(r.posterior)).dump(1)
+         << "\n";
+    });
+  }
   const auto& before = r.checks_before;
   const auto& after = r.checks_after;
   const double n = static_cast<double>(r.trucks);
