@@ -23,6 +23,10 @@ int run_reproduce(int argc, const char* const argv[]) {
       ("particles", po::value(&o.particles)->default_value(o.particles), "SMC particles")
       ("threads", po::value(&o.threads)->default_value(o.threads), "worker threads; 0 = all cores")
       ("noise", po::value(&o.noise_sd)->default_value(o.noise_sd), "measurement noise sd sigma_IF")
+      ("model", po::value(&o.model)->default_value(o.model),
+       "the model the fits use: base (the paper's) or effects joined by '+' (a parameter given is fixed, one left out fitted)")
+      ("effect", po::value(&o.effect),
+       "hide effects in the simulated data, every parameter given (e.g. speed_bias:factor=1.05); the paper's data has none")
       ("draws", po::value(&o.theta_draws)->default_value(o.theta_draws), "prediction: posterior draws of theta")
       ("trucks-per-draw", po::value(&o.trucks_per_draw)->default_value(o.trucks_per_draw),
        "prediction: simulated trucks per theta draw")

@@ -11,7 +11,9 @@
 #include "fleet/replay.hpp"
 #include "fleet/simulator.hpp"
 #include "io/atomic_file.hpp"
+#include "io/posterior_json.hpp"
 #include "model/fleet_distribution.hpp"
+#include "model/model_spec.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "reproduce/gnuplot_scripts.hpp"
 #include "site/road_source.hpp"
@@ -67,6 +69,11 @@ fleet::PosteriorCloud stream_fit(const site::Site& site, const std::vector<recor
                                  const std::string& label,
                                  const std::function<void(std::size_t, const fleet::OnlineFit&)>& after_each) {
   fleet::OnlineFitOptions so;  // the default (marginal) core, as `fit` uses
+  const fleet::ModelSpec model = fleet::parse_model_spec(o.model, site);
+  if (model.extension) {  // effects ride in the latent core's particles, as `fit --model` runs them
+    so.core = fleet::OnlineFitOptions::Core::kLatent;
+    so.latent.extension = model.extension.get();
+  }
   so.sampler().particles = o.particles;
   so.sampler().threads = o.threads > 0 ? o.threads : smc::TemperedSampler::Options::default_threads();
   so.sampler().seed = o.seed;
@@ -139,8 +146,13 @@ Result run(const Options& o) {
   const site::Site site(site::load_road("AS1"), site::SiteOptions{});
   const int M = site.sensors();
   const auto trucks = fleet::draw_fleet(dist, o.trucks, site.lateral_min_m(), site.lateral_max_m(), o.seed);
-  const auto log = fleet::simulate_log(site, trucks, o.noise_sd, o.seed);
+  const fleet::SimulationModel hidden = fleet::parse_simulation_model(o.effect, site);
+  fleet::parse_model_spec(o.model, site);  // a bad model fails here, before the work
+  const auto log = hidden.extension ? fleet::simulate_log(site, trucks, o.noise_sd, o.seed, *hidden.extension, hidden.psi)
+                                    : fleet::simulate_log(site, trucks, o.noise_sd, o.seed);
   const auto& records = log.records;
+  if (hidden.extension || o.model != "base") say("data with " + (hidden.extension ? hidden.text : std::string("no effect")) +
+                                                 ", fitted with model " + o.model);
   say(std::to_string(trucks.size()) + " Table 1 trucks on AS1 (" + std::to_string(M) + " sensors), noise sd " +
       fmt(o.noise_sd) + ", seed " + std::to_string(o.seed) + ", " + std::to_string(o.particles) + " particles -> " +
       o.out_dir);
@@ -185,6 +197,10 @@ Result run(const Options& o) {
   });
   res.fit_wall_s = seconds_since(fit_start);
   res.hyper = summarise(cloud);
+  // The fit's posterior, with its model, ready for predict.
+  write("posterior.json", [&](std::ostream& os) {
+    os << io::posterior_to_json(cloud, fleet::summarise_cloud(cloud), fleet::summarise_psi(cloud)).dump(1) << "\n";
+  });
   for (int j = 0; j < fleet::kHyperCount; ++j) {
     res.hyper_covered += (res.truth[j] >= res.hyper[j].q025 && res.truth[j] <= res.hyper[j].q975) ? 1 : 0;
   }

@@ -25,6 +25,11 @@ struct Options {
   int theta_draws = 200;    // prediction: θ draws ...
   int trucks_per_draw = 100;  // ... and simulated trucks per draw
   bool plots = true;        // run gnuplot when it is on PATH (scripts are written regardless)
+  // The model the fits use (model/model_spec.hpp; "base" = the paper's), and effects hidden in the
+  // simulated data (every parameter given; "" = none, the paper's data). Together they test
+  // whether a model recovers an effect and the SSR prediction with it.
+  std::string model = "base";
+  std::string effect;
   std::ostream* progress = nullptr;  // progress lines; nullptr = quiet
 
   void validate() const;  // UsageError naming the option
