@@ -42,7 +42,7 @@ int run_stream(int argc, const char* const argv[]) {
   po::options_description desc("stream options");
   desc.add_options()
       ("help,h", "show this help")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3 or a road CSV file")
+      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
       ("state", po::value(&options.state_dir)->required(), "state directory (checkpoint, posterior.json, rejects.csv)")
       ("input,i", po::value(&input)->default_value(input), "WIM log to read ('-' = standard input)")
       ("follow,f", po::bool_switch(&options.follow), "at the end of the input wait for more, like tail -f (stop with Ctrl-C)")
@@ -70,7 +70,7 @@ int run_stream(int argc, const char* const argv[]) {
   if (!options.fit.sampler().IsValid(&why)) throw UsageError(why);
   if (options.follow && input == "-") throw UsageError("--follow needs --input FILE (standard input follows by itself)");
 
-  const site::Site site(site::load_road(road), site_flags.to_options());
+  const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   install_stop_handlers();
   stream::WimStream stream(site, options, quiet ? nullptr : &std::cerr, std::cout);
   std::ifstream file;
