@@ -164,7 +164,7 @@ std::string to_text(const SurfaceSummary& s) {
     os << "  PSD fit     G_d(" << s.psd.n0_cpm << " cycle/m) = " << s.psd.gd_n0_m3 * 1e6 << "e-6 m^3, w = "
        << s.psd.waviness << " (" << s.psd_band_lo_cpm << "-" << s.psd_band_hi_cpm << " cycle/m, " << s.psd.bins
        << " bins)\n";
-    os << "  class       " << s.roughness_class.label << " (" << s.roughness_class.table << ")\n";
+    os << "  class       " << s.roughness_class.label << " in " << s.roughness_class.table << "\n";
   } else {
     os << "  PSD fit     none (surface too short or too coarse, or no line without missing cells)\n";
   }
