@@ -95,7 +95,7 @@ TEST_CASE("an OpenCRG road works wherever a road is taken: road, simulate, fit, 
   CHECK(stream.status == 0);
 }
 
-TEST_CASE("missing road in the trucks' stretch is refused; elsewhere it is reported", "[cli][crg]") {
+TEST_CASE("missing road in the trucks' stretch is refused, elsewhere it is reported", "[cli][crg]") {
   test::TempDir dir;
   // A hand-written LRFI road, 100 m at 0.5 m by 3 long sections, with a hole at x = 99.5 m.
   const auto road_file = [&](const std::string& name, int hole_row) {

@@ -186,7 +186,7 @@ TEST_CASE("a hand-built KRBI payload: the default data type, NaN cells and NaN p
   CHECK(road.report.warnings.empty());
 }
 
-TEST_CASE("a surface written as KDBI reads back bit for bit, missing cells included; KRBI to float",
+TEST_CASE("a surface written as KDBI reads back bit for bit, missing cells included, and KRBI to float",
           "[road][crg]") {
   Surface s = preset_surface("AS2");
   s.height_m.col(0).segment(1500, 20).setConstant(std::numeric_limits<double>::quiet_NaN());
@@ -314,6 +314,11 @@ TEST_CASE("bad OpenCRG input is refused naming the file and the line or byte off
     CHECK(e->line() == 23);
     CHECK(e->field() == "channel 3 (column 21)");
     CHECK_THAT(e->what(), Catch::Contains("nan.crg:23") && Catch::Contains("'0.00O4000' is not a number"));
+    text = kLrfi;  // a NaN written out is not the '*' placeholder of a missing value
+    text.replace(text.find(" 0.0004000"), 10, "       nan");
+    const auto e2 = data_error([&] { read_crg(text, "nan.crg"); });
+    REQUIRE(e2);
+    CHECK(e2->line() == 23);
   }
   SECTION("an unknown data type") {
     std::string text = kLrfi;

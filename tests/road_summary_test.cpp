@@ -50,7 +50,7 @@ TEST_CASE("the summary of a preset describes its grid, PSD and IRI across the ro
   CHECK(j.at("iri").at("mean_m_per_km").get<double>() == sum.iri_mean_m_per_km);
 }
 
-TEST_CASE("the roughness class is labelled with its table; the paper's older table reads one class better",
+TEST_CASE("the roughness class is labelled with its table, and the paper's older table reads one class better",
           "[road][summary]") {
   // ISO 8608:1995 bounds 32, 128, 512 ... e-6 m^3; the 1982 draft's 8, 32, 128, 512.
   CHECK(roughness_class(20e-6).label == "A");

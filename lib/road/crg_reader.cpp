@@ -371,7 +371,7 @@ void decode_text(std::string_view bytes, const CrgHeader& h, std::size_t declare
                               " characters holds a number or a '*' placeholder for a missing value");
         }
         double v = std::numeric_limits<double>::quiet_NaN();
-        if (cell.front() != '*' && (!parse_real(cell, v) || std::isinf(v))) {
+        if (cell.front() != '*' && (!parse_real(cell, v) || !std::isfinite(v))) {  // a missing value is '*...'
           throw DataError(source, span.number, where,
                           "'" + std::string(cell) + "' is not a number (" + crg_format_name(h.format) +
                               " fields are " + std::to_string(width) + " characters wide)");
