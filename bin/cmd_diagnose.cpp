@@ -33,7 +33,7 @@ int run_diagnose(int argc, const char* const argv[]) {
   desc.add_options()
       ("help,h", "show this help")
       ("log", po::value(&log_path)->required(), "WIM log (CSV) to diagnose")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3 or a road CSV file")
+      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
       ("json", po::value(&json_path), "write the JSON report here ('-' = standard output)")
       ("out,o", po::value(&out_dir), "folder for the report, per-sensor CSVs, plots and posterior.json (the posterior it ends with)")
       ("posterior", po::value(&posterior_path),
@@ -71,7 +71,7 @@ int run_diagnose(int argc, const char* const argv[]) {
     }
   }
   o.validate();
-  const site::Site site(site::load_road(road), site_flags.to_options());
+  const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   for (const auto& name : o.candidates) fleet::make_extension(name, site);  // unknown names fail before any work
   const auto records = read_site_log(log_path, site, site_flags);
   if (!quiet) o.progress = &std::cerr;

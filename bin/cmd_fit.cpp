@@ -27,7 +27,7 @@ int run_fit(int argc, const char* const argv[]) {
   desc.add_options()
       ("help,h", "show this help")
       ("log", po::value(&log_path)->required(), "WIM log (CSV) to replay")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3 or a road CSV file")
+      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
       ("out,o", po::value(&out)->default_value(out), "posterior file to write (JSON)")
       ("method", po::value(&method)->default_value(method), "smc (sequential, default) or mcmc (the paper's batch baseline)")
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
@@ -47,7 +47,7 @@ int run_fit(int argc, const char* const argv[]) {
   const std::uint64_t seed = parse_seed(seed_text);
   if (method != "smc" && method != "mcmc") throw UsageError("--method '" + method + "': must be smc or mcmc");
 
-  const site::Site site(site::load_road(road), site_flags.to_options());
+  const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   const fleet::ModelSpec model = fleet::parse_model_spec(fit.model, site);
   const auto records = read_site_log(log_path, site, site_flags);
   if (!quiet) {

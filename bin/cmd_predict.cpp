@@ -60,7 +60,7 @@ int run_predict(int argc, const char* const argv[]) {
   desc.add_options()
       ("help,h", "show this help")
       ("posterior", po::value(&posterior_path)->required(), "posterior file from fit, or a stream's state directory")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3 or a road CSV file")
+      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
       ("new-road", po::bool_switch(&new_road), "predict on a site other than the fitted one (paper Fig. 9)")
       ("positions", po::value(&positions), "where to predict: list 'a,b,c' or FIRST:STEP:LAST (default: the sensors)")
       ("draws", po::value(&options.theta_draws)->default_value(options.theta_draws), "posterior draws of theta")
@@ -81,7 +81,7 @@ int run_predict(int argc, const char* const argv[]) {
   options.seed = parse_seed(seed_text);
   options.traffic_bootstrap = !fixed_traffic;
   const auto cloud = io::read_posterior_file(posterior_path);
-  const site::Site site(site::load_road(road), site_flags.to_options());
+  const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   if (!new_road && cloud.site_fingerprint != site.fingerprint()) {
     throw UsageError("the posterior in '" + posterior_path + "' was fitted on another site (road '" + cloud.road_name +
                      "', fingerprint " + cloud.site_fingerprint + ") than road '" + site.surface().name +

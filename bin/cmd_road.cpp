@@ -1,43 +1,126 @@
-// ssrfleet road: write a preset surface as a road CSV, or summarise a surface (preset or file):
-// size, spacing, RMS height, fitted G_d(n0) and waviness w, and the IRI across the width.
+// ssrfleet road: describe a road (preset, road CSV, OpenCRG surface or ERD profiles): size,
+// spacing, missing cells, RMS height, fitted G_d(n0) and waviness w with its roughness class, the
+// IRI of the wheel paths and across the width; and convert it: a surface to a road CSV or an
+// OpenCRG file (--write), the wheel paths' profiles to an ERD file (--erd).
+#include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "road/crg_writer.hpp"
+#include "road/erd_format.hpp"
+#include "road/road_format.hpp"
 #include "road/surface_csv.hpp"
+#include "road/surface_presets.hpp"
 #include "road/surface_summary.hpp"
+#include "road/wheel_path.hpp"
 #include "site/road_source.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::cli {
 
+namespace {
+
+std::vector<double> parse_positions(const std::string& text) {
+  std::vector<double> zs;
+  std::stringstream in(text);
+  std::string cell;
+  while (std::getline(in, cell, ',')) {
+    std::size_t used = 0;
+    double z = 0.0;
+    try {
+      z = std::stod(cell, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != cell.size()) throw UsageError("--wheel-paths: '" + cell + "' is not a lateral position (m)");
+    zs.push_back(z);
+  }
+  if (zs.empty()) throw UsageError("--wheel-paths needs at least one lateral position (m)");
+  return zs;
+}
+
+bool ends_with_crg(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".crg";
+}
+
+void print(const road::SurfaceSummary& summary, bool json) {
+  if (json) {
+    std::cout << road::to_json(summary).dump(2) << "\n";
+    return;
+  }
+  const std::string text = road::to_text(summary);
+  std::cout << text << (text.empty() || text.back() != '\n' ? "\n" : "");
+}
+
+}  // namespace
+
 int run_road(int argc, const char* const argv[]) {
-  std::string spec, write_path;
+  std::string spec, write_path, erd_path, wheel_paths_text, crg_format_text = "KDBI", classes = "iso8608";
   bool json = false;
   double iri_step_m = 0.5;
   po::options_description desc("road options");
   desc.add_options()
       ("help,h", "show this help")
-      ("road", po::value(&spec)->required(), "preset AS1|AS2|AS3 or a road CSV file (positional)")
-      ("write,w", po::value(&write_path), "write the surface as a road CSV to this file")
+      ("road", po::value(&spec)->required(),
+       "preset AS1|AS2|AS3, a road CSV, an OpenCRG (.crg) surface or an ERD profile file (positional)")
+      ("write,w", po::value(&write_path), "write the surface to this file: OpenCRG if it ends in .crg, else a road CSV")
+      ("crg-format", po::value(&crg_format_text)->default_value(crg_format_text),
+       "OpenCRG data type for --write: KDBI (binary double, exact), KRBI, LDFI or LRFI")
+      ("erd", po::value(&erd_path), "write the wheel paths' longitudinal profiles to this ERD file")
+      ("wheel-paths", po::value(&wheel_paths_text),
+       "lateral positions (m) of the wheel paths, comma-separated (default: the surface's centre -/+ 0.9 m)")
+      ("classes", po::value(&classes)->default_value(classes),
+       "roughness class table: iso8608 (ISO 8608:1995) or paper (the ISO draft of 1982 the paper's labels follow)")
       ("json", po::bool_switch(&json), "print the summary as JSON instead of text")
-      ("iri-step", po::value(&iri_step_m)->default_value(iri_step_m), "lateral spacing of the IRI wheel paths (m)");
+      ("iri-step", po::value(&iri_step_m)->default_value(iri_step_m), "lateral spacing of the IRI positions (m)");
   po::positional_options_description positional;
   positional.add("road", 1);
   po::variables_map vm;
-  if (!parse_or_help(argc, argv, desc, &positional, vm, "usage: ssrfleet road AS1|AS2|AS3|FILE [--write FILE] [--json]")) {
+  if (!parse_or_help(argc, argv, desc, &positional, vm,
+                     "usage: ssrfleet road AS1|AS2|AS3|FILE [--write FILE.csv|FILE.crg] [--erd FILE] [--wheel-paths Z,...] "
+                     "[--json]")) {
     return 0;
   }
   if (!(iri_step_m > 0.0)) throw UsageError("--iri-step must be positive");
-  const road::Surface surface = site::load_road(spec);
-  if (!write_path.empty()) road::write_surface_csv_file(surface, write_path);
-  const road::SurfaceSummary summary = road::summarize(surface, iri_step_m);
-  if (json) std::cout << road::to_json(summary).dump(2) << "\n";
-  else {
-    const std::string text = road::to_text(summary);
-    std::cout << text << (text.empty() || text.back() != '\n' ? "\n" : "");
+  road::CrgDataFormat crg_format{};
+  if (!road::parse_crg_format(crg_format_text, crg_format)) {
+    throw UsageError("--crg-format: '" + crg_format_text + "' is not one of KDBI, KRBI, LDFI, LRFI");
   }
+  road::SummaryOptions options;
+  options.iri_step_m = iri_step_m;
+  try {
+    options.table = road::parse_roughness_table(classes);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--classes: ") + e.what());
+  }
+  if (vm.count("wheel-paths")) options.wheel_paths_m = parse_positions(wheel_paths_text);
+
+  if (!road::is_preset_name(spec) && road::detect_road_format(spec) == road::RoadFileFormat::erd) {
+    // Longitudinal profiles: each one a wheel path; there is no surface to write or to sample.
+    if (!write_path.empty()) throw UsageError("--write needs a surface; '" + spec + "' holds profiles (ERD)");
+    if (!options.wheel_paths_m.empty()) throw UsageError("--wheel-paths needs a surface; in '" + spec + "' each profile is one");
+    const road::LongitudinalProfiles profiles = road::read_erd_file(spec);
+    if (!erd_path.empty()) road::write_erd_file(profiles, erd_path);
+    print(road::summarize(profiles, options.table), json);
+    return 0;
+  }
+  const road::Surface surface = site::load_road(spec, &std::cerr);
+  const road::SurfaceSummary summary = road::summarize(surface, options);
+  if (!write_path.empty()) {
+    if (ends_with_crg(write_path)) road::write_crg_file(surface, write_path, crg_format);
+    else road::write_surface_csv_file(surface, write_path);
+  }
+  if (!erd_path.empty()) {
+    const std::vector<double> zs = options.wheel_paths_m.empty() ? road::default_wheel_paths_m(surface) : options.wheel_paths_m;
+    road::write_erd_file(road::wheel_path_profiles(surface, zs), erd_path);
+  }
+  print(summary, json);
   return 0;
 }
 

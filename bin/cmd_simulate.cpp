@@ -32,7 +32,7 @@ int run_simulate(int argc, const char* const argv[]) {
   po::options_description desc("simulate options");
   desc.add_options()
       ("help,h", "show this help")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3 or a road CSV file")
+      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
       ("trucks", po::value(&trucks_arg)->default_value(trucks_arg),
        "number of trucks to draw from the fleet distribution, or a truck-list CSV file")
       ("noise", po::value(&noise)->default_value(noise), "measurement noise sd sigma_IF; 0 = exact model output")
@@ -68,7 +68,7 @@ int run_simulate(int argc, const char* const argv[]) {
   const std::uint64_t seed = parse_seed(seed_text);
   if (!(noise >= 0.0)) throw UsageError("--noise " + std::to_string(noise) + ": must be >= 0");
 
-  const site::Site site(site::load_road(road), site_flags.to_options());
+  const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   std::vector<records::Truck> trucks;
   if (is_count(trucks_arg)) {
     const long n = std::stol(trucks_arg);

@@ -43,7 +43,7 @@ int run_stream(int argc, const char* const argv[]) {
   po::options_description desc("stream options");
   desc.add_options()
       ("help,h", "show this help")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3 or a road CSV file")
+      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
       ("state", po::value(&options.state_dir)->required(), "state directory (checkpoint, posterior.json, rejects.csv)")
       ("input,i", po::value(&input)->default_value(input), "WIM log to read ('-' = standard input)")
       ("follow,f", po::bool_switch(&options.follow), "at the end of the input wait for more, like tail -f (stop with Ctrl-C)")
@@ -68,7 +68,7 @@ int run_stream(int argc, const char* const argv[]) {
   if (options.fit.latent.window < 0) throw UsageError("--window must be >= 0");
   if (options.fit.latent.window > 0) options.fit.core = fleet::OnlineFitOptions::Core::kLatent;
   // The core is chosen before the sampler options go to it (sampler() is the chosen core's).
-  const site::Site site(site::load_road(road), site_flags.to_options());
+  const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   const fleet::ModelSpec model = fleet::parse_model_spec(model_text, site);
   if (model.extension) {
     if (options.fit.latent.window > 0) {

@@ -289,9 +289,9 @@ Moments weighted_moments(const Eigen::VectorXd& x, const Eigen::ArrayXd& w) {
 // Tolerance. The offset of two Monte Carlo estimates of one mean has, in posterior-sd units, the
 // sd sqrt(1/ESS_mcmc + se_smc^2) when both target the same posterior:
 //  - the MCMC's: 1/sqrt(ESS) from the chain's own ESS (Geyer, util/effective_sample_size.hpp);
-//  - the SMC's: measured, not assumed: two SMC runs with different seeds, whose difference has
-//    variance 2 se^2 for one run, so the mean of the two has se_smc = |m1 - m2| / 2. One pair is a
-//    one-degree-of-freedom estimate per parameter, so it is pooled (root mean square) over the
+//  - the SMC's: measured, not assumed: kSmcRuns SMC runs with different seeds; the sample variance
+//    s^2 of their means (kSmcRuns - 1 degrees of freedom per parameter) estimates one run's
+//    se^2, so their average has se_smc^2 = s^2 / kSmcRuns, pooled (mean square) over the
 //    extension's parameters.
 // The test first requires that combined Monte Carlo sd to be at most 0.25 / 3 for every parameter
 // (otherwise a 0.25 sd threshold could not tell a real disagreement from noise, and the test says
@@ -328,6 +328,11 @@ TEST_CASE("the latent SMC and the batch MCMC agree on every extension's posterio
   constexpr int kTrucks = 50;
   constexpr Eigen::Index kParticles = 1024;
   constexpr int kMcmcIterations = 30000, kMcmcBurnIn = 5000;
+  // Four runs, not two: with two, the SMC's seed scatter on profile_defect's length-height ridge
+  // (one pair of runs 0.35 sd apart on the length) put the Monte Carlo sd of the comparison at
+  // 0.084-0.091 sd, just over the 0.083 the test needs to resolve 0.25 sd; averaging four halves
+  // the SMC's share of it and estimates it from 3 degrees of freedom per parameter.
+  constexpr std::uint64_t kSmcRuns = 4;
   constexpr double kTolerance = 0.25;  // posterior sd
   const auto& site = as1();
   for (const auto& name : fleet::extension_names()) {
@@ -338,10 +343,10 @@ TEST_CASE("the latent SMC and the batch MCMC agree on every extension's posterio
       const auto ext = fleet::make_extension(name, site);
       const Eigen::Index d = ext->dim();
 
-      // The SMC, twice (seeds 1, 2): θ and ψ per particle, with the cloud's weights.
+      // The SMC, kSmcRuns times (seeds 1, 2, ...): θ and ψ per particle, with the cloud's weights.
       std::vector<Eigen::MatrixXd> smc_states;  // (7 + d) x P
       std::vector<Eigen::ArrayXd> smc_weights;
-      for (std::uint64_t seed : {1, 2}) {
+      for (std::uint64_t seed = 1; seed <= kSmcRuns; ++seed) {
         fleet::FleetSmc::Options o;  // the latent core's defaults (`fit --core latent`, diagnose)
         o.sampler.particles = kParticles;
         o.sampler.threads = 2;
@@ -372,32 +377,37 @@ TEST_CASE("the latent SMC and the batch MCMC agree on every extension's posterio
       std::vector<std::string> names(fleet::kHyperNames.begin(), fleet::kHyperNames.end());
       for (const auto& p : ext->parameters()) names.push_back(name + "." + p.name);
       const Eigen::Index J = fleet::kHyperCount + d;
-      std::vector<double> offset(J), mcmc_se(J), smc_diff(J), ess(J), smc_mean(J), mcmc_mean(J), mcmc_sd(J);
+      std::vector<double> offset(J), mcmc_se(J), smc_spread(J), ess(J), smc_mean(J), mcmc_mean(J), mcmc_sd(J);
       double pooled = 0.0;
       for (Eigen::Index j = 0; j < J; ++j) {
         const Eigen::VectorXd c = chain.col(j);
         const double mean = c.mean(), sd = std::sqrt((c.array() - mean).square().mean());
-        const Moments a = weighted_moments(smc_states[0].row(j).transpose(), smc_weights[0]);
-        const Moments b = weighted_moments(smc_states[1].row(j).transpose(), smc_weights[1]);
+        std::vector<double> run_means;
+        for (std::size_t k = 0; k < smc_states.size(); ++k) {
+          run_means.push_back(weighted_moments(smc_states[k].row(j).transpose(), smc_weights[k]).mean);
+        }
+        double m = 0.0, s2 = 0.0;
+        for (double v : run_means) m += v / static_cast<double>(kSmcRuns);
+        for (double v : run_means) s2 += (v - m) * (v - m) / static_cast<double>(kSmcRuns - 1);
         ess[j] = chain_effective_sample_size(c);
         mcmc_se[j] = 1.0 / std::sqrt(ess[j]);
-        smc_diff[j] = (a.mean - b.mean) / sd;
-        pooled += smc_diff[j] * smc_diff[j];
-        offset[j] = (0.5 * (a.mean + b.mean) - mean) / sd;
-        smc_mean[j] = 0.5 * (a.mean + b.mean);
+        smc_spread[j] = std::sqrt(s2) / sd;  // one run's seed-to-seed sd, in posterior sd
+        pooled += smc_spread[j] * smc_spread[j];
+        offset[j] = (m - mean) / sd;
+        smc_mean[j] = m;
         mcmc_mean[j] = mean;
         mcmc_sd[j] = sd;
       }
-      const double smc_se = std::sqrt(pooled / static_cast<double>(J)) / 2.0;
+      const double smc_se = std::sqrt(pooled / static_cast<double>(J) / static_cast<double>(kSmcRuns));
       const double mcmc_seconds = r.wall_seconds;
       std::ostringstream report;
-      report << name << ": SMC " << smc_seconds << " s (2 runs), MCMC " << mcmc_seconds << " s (" << kMcmcIterations
+      report << name << ": SMC " << smc_seconds << " s (" << kSmcRuns << " runs), MCMC " << mcmc_seconds << " s (" << kMcmcIterations
              << " sweeps), psi acceptance " << r.psi_acceptance << ", jump " << r.psi_jump_acceptance
              << ", joint latent jump " << r.joint_jump_acceptance << ", SMC se " << smc_se << " sd\n";
       for (Eigen::Index j = 0; j < J; ++j) {
         report << "  " << names[static_cast<std::size_t>(j)] << ": SMC mean " << smc_mean[j] << ", MCMC mean "
                << mcmc_mean[j] << " (sd " << mcmc_sd[j] << "), offset " << offset[j] << " sd, MCMC ESS " << ess[j]
-               << ", SMC seed difference " << smc_diff[j] << " sd\n";
+               << ", SMC run-to-run sd " << smc_spread[j] << " sd\n";
       }
       WARN(report.str());  // the measured offsets and times, for the record
       for (Eigen::Index j = 0; j < J; ++j) {

@@ -1,12 +1,23 @@
-// The surface summary: geometry, PSD fit, IRI across the road, in text and JSON.
+// The road summary: geometry, PSD fit and its roughness class, the wheel paths' IRI and the IRI
+// across the road, missing cells, in text and JSON; from a surface, an OpenCRG file or ERD profiles.
 #include <catch2/catch.hpp>
 
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
+#include "road/crg_reader.hpp"
+#include "road/crg_writer.hpp"
+#include "road/erd_format.hpp"
 #include "road/iri.hpp"
+#include "road/roughness_class.hpp"
 #include "road/surface_presets.hpp"
 #include "road/surface_summary.hpp"
 #include "road/wheel_path.hpp"
+#include "util/errors.hpp"
 
 using namespace ssrfleet::road;
 
@@ -37,4 +48,90 @@ TEST_CASE("the summary of a preset describes its grid, PSD and IRI across the ro
   CHECK(j.at("psd_fit").at("gd_n0_m3").get<double>() == sum.psd.gd_n0_m3);
   CHECK(j.at("iri").at("by_position").size() == 11);
   CHECK(j.at("iri").at("mean_m_per_km").get<double>() == sum.iri_mean_m_per_km);
+}
+
+TEST_CASE("the roughness class is labelled with its table, and the paper's older table reads one class better",
+          "[road][summary]") {
+  // ISO 8608:1995 bounds 32, 128, 512 ... e-6 m^3; the 1982 draft's 8, 32, 128, 512.
+  CHECK(roughness_class(20e-6).label == "A");
+  CHECK(roughness_class(20e-6, RoughnessTable::iso_draft_1982).label == "B");  // the paper's AS1, AS2
+  CHECK(roughness_class(64e-6).label == "B");
+  CHECK(roughness_class(64e-6, RoughnessTable::iso_draft_1982).label == "C");  // the paper's AS3
+  CHECK(roughness_class(32e-6).label == "B");                                  // a lower bound belongs to its class
+  CHECK(roughness_class(200e-3).label == "H");
+  CHECK(roughness_class(1e-6, RoughnessTable::iso_draft_1982).label == "A");
+  CHECK(roughness_class(5e-3, RoughnessTable::iso_draft_1982).label == "E");
+  const RoughnessClass b = roughness_class(64e-6);
+  CHECK(b.table == "ISO 8608:1995");
+  CHECK(b.lower_m3 == 32e-6);
+  CHECK(b.upper_m3 == 128e-6);
+  CHECK(parse_roughness_table("paper") == RoughnessTable::iso_draft_1982);
+  CHECK_THROWS_AS(parse_roughness_table("bs"), std::invalid_argument);
+
+  // The presets' fitted levels (AS1 ~23e-6, AS3 ~64e-6 within the 35 % band of one surface) land
+  // inside a class in both tables, as DESIGN.md §1 says.
+  SummaryOptions paper;
+  paper.table = RoughnessTable::iso_draft_1982;
+  CHECK(summarize(preset_surface("AS1")).roughness_class.label == "A");
+  CHECK(summarize(preset_surface("AS1"), paper).roughness_class.label == "B");
+  const SurfaceSummary as3 = summarize(preset_surface("AS3"), paper);
+  CHECK(as3.roughness_class.label == "C");
+  CHECK(as3.roughness_class.table == "ISO draft 1982 (the paper's classes)");
+  const nlohmann::json j = to_json(as3);
+  CHECK(j.at("roughness_class").at("class") == "C");
+  CHECK(j.at("roughness_class").at("table") == "ISO draft 1982 (the paper's classes)");
+}
+
+TEST_CASE("the wheel paths' IRI is reported, and missing cells are counted, skipped or refused", "[road][summary]") {
+  Surface s = preset_surface("AS1");
+  SummaryOptions options;
+  options.wheel_paths_m = {1.25, 3.75};
+  const SurfaceSummary full = summarize(s, options);
+  REQUIRE(full.wheel_paths.size() == 2);
+  CHECK(full.wheel_paths[1].label == "z=3.75m");
+  CHECK(full.wheel_paths[1].iri_m_per_km == iri_m_per_km(wheel_path(s, 3.75), s.dx_m));
+  CHECK(full.missing_cells == 0);
+  // Defaults: a 1.8 m track centred on the surface.
+  CHECK(default_wheel_paths_m(s) == std::vector<double>{1.6, 3.4});
+
+  // A hole along the right edge (lines 0 and 1, 2 m of road): counted; the IRI positions over it
+  // report none; the PSD is fitted on the complete lines; a wheel path over it is refused.
+  s.height_m.block(400, 0, 40, 2).setConstant(std::numeric_limits<double>::quiet_NaN());
+  const SurfaceSummary holed = summarize(s, options);
+  CHECK(holed.missing_cells == 80);
+  CHECK(std::isnan(holed.iri_by_position[0].second));  // z = 0
+  CHECK(holed.iri_by_position[1].second == full.iri_by_position[1].second);  // z = 0.5: clear
+  CHECK(holed.psd.bins > 0);
+  CHECK(holed.psd.gd_n0_m3 == Approx(full.psd.gd_n0_m3).epsilon(0.05));
+  CHECK(holed.wheel_paths[0].iri_m_per_km == full.wheel_paths[0].iri_m_per_km);
+  CHECK(to_json(holed).at("iri").at("by_position")[0].at("iri_m_per_km").is_null());
+  CHECK(to_json(holed).at("missing_cells") == 80);
+  options.wheel_paths_m = {0.02};
+  try {
+    summarize(s, options);
+    FAIL("a wheel path over missing cells was accepted");
+  } catch (const ssrfleet::DataError& e) {
+    CHECK_THAT(e.what(), Catch::Contains("AS1") && Catch::Contains("wheel path z = 0.02 m") &&
+                             Catch::Contains("80 missing cells, the first at x = 20 m, y = 0 m"));
+  }
+}
+
+TEST_CASE("a wheel path's IRI is the same from the surface, its OpenCRG file and its ERD profile", "[road][summary]") {
+  const Surface s = preset_surface("AS3");
+  std::ostringstream crg, erd;
+  write_crg(s, crg);
+  write_erd(wheel_path_profiles(s, default_wheel_paths_m(s)), erd);
+  const SurfaceSummary direct = summarize(s);
+  const SurfaceSummary from_crg = summarize(read_crg(crg.str(), "as3.crg").surface);
+  const SurfaceSummary from_erd = summarize(read_erd(erd.str(), "as3.erd"));
+  REQUIRE(from_erd.wheel_paths.size() == 2);
+  for (std::size_t k = 0; k < 2; ++k) {
+    CHECK(from_crg.wheel_paths[k].iri_m_per_km == direct.wheel_paths[k].iri_m_per_km);
+    CHECK(from_erd.wheel_paths[k].iri_m_per_km == direct.wheel_paths[k].iri_m_per_km);
+    CHECK(from_erd.wheel_paths[k].label == direct.wheel_paths[k].label);
+  }
+  CHECK(std::isnan(from_erd.wheel_paths[0].z_m));
+  CHECK(from_erd.dy_m == 0.0);
+  CHECK(from_erd.psd.bins > 0);
+  CHECK(!from_erd.roughness_class.label.empty());
 }

@@ -1,7 +1,5 @@
 #include "road/surface_csv.hpp"
 
-#include <unistd.h>
-
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -12,6 +10,7 @@
 #include <system_error>
 #include <vector>
 
+#include "road/road_file.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::road {
@@ -20,12 +19,7 @@ namespace {
 
 constexpr double kSpacingTolerance = 1e-6;  // relative, on each step against the first
 
-std::string_view trim(std::string_view s) {
-  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
-  while (!s.empty() && blank(s.front())) s.remove_prefix(1);
-  while (!s.empty() && blank(s.back())) s.remove_suffix(1);
-  return s;
-}
+std::string_view trim(std::string_view s) { return trim_blanks(s); }
 
 std::vector<std::string_view> split_cells(std::string_view line) {
   std::vector<std::string_view> cells;
@@ -212,25 +206,7 @@ void write_surface_csv(const Surface& surface, std::ostream& out) {
 }
 
 void write_surface_csv_file(const Surface& surface, const std::string& path) {
-  const std::string temporary = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError("cannot write road surface file '" + path + "' (cannot create '" + temporary + "')");
-    write_surface_csv(surface, out);
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw IoError("writing road surface file '" + path + "' failed");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(temporary, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw IoError("cannot write road surface file '" + path + "': " + ec.message());
-  }
+  write_file_atomically(path, "road surface file", [&](std::ostream& out) { write_surface_csv(surface, out); });
 }
 
 }  // namespace ssrfleet::road

@@ -5,6 +5,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "road/missing_cells.hpp"
+#include "util/errors.hpp"
+
 namespace ssrfleet::road {
 
 LateralBracket bracket(const Surface& surface, double z_m) {
@@ -29,6 +32,42 @@ Eigen::ArrayXd wheel_path(const Surface& surface, double z_m) {
   const LateralBracket b = bracket(surface, z_m);
   if (b.weight_b == 0.0) return surface.height_m.col(b.line_a);
   return (1.0 - b.weight_b) * surface.height_m.col(b.line_a) + b.weight_b * surface.height_m.col(b.line_b);
+}
+
+Eigen::ArrayXd complete_wheel_path(const Surface& surface, double z_m) {
+  const LateralBracket b = bracket(surface, z_m);
+  const Eigen::Index last = b.weight_b == 0.0 ? b.line_a : b.line_b;
+  const MissingCells missing = find_missing(surface, 0, surface.samples(), b.line_a, last + 1);
+  if (missing.count > 0) {
+    std::ostringstream where;
+    where << "wheel path z = " << z_m << " m";
+    throw DataError(surface.name, 0, where.str(),
+                    "crosses " + describe(missing, surface) +
+                        ": a wheel path must lie on measured road (choose positions clear of the holes)");
+  }
+  return wheel_path(surface, z_m);
+}
+
+LongitudinalProfiles wheel_path_profiles(const Surface& surface, const std::vector<double>& zs_m) {
+  LongitudinalProfiles p;
+  p.name = surface.name;
+  p.dx_m = surface.dx_m;
+  p.height_m.resize(surface.samples(), static_cast<Eigen::Index>(zs_m.size()));
+  for (std::size_t k = 0; k < zs_m.size(); ++k) {
+    p.height_m.col(static_cast<Eigen::Index>(k)) = complete_wheel_path(surface, zs_m[k]);
+    std::ostringstream label;
+    label.precision(4);
+    label << "z=" << zs_m[k] << "m";
+    p.labels.push_back(label.str());
+  }
+  return p;
+}
+
+std::vector<double> default_wheel_paths_m(const Surface& surface) {
+  constexpr double kHalfTrack_m = 0.9;
+  const double centre = 0.5 * (surface.y0_m + surface.y_max_m());
+  if (surface.y_max_m() - surface.y0_m < 2.0 * kHalfTrack_m) return {centre};
+  return {centre - kHalfTrack_m, centre + kHalfTrack_m};
 }
 
 }  // namespace ssrfleet::road

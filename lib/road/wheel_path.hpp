@@ -3,8 +3,11 @@
 // driving off the measured carpet is a mistake in the inputs.
 #pragma once
 
+#include <vector>
+
 #include <Eigen/Core>
 
+#include "road/longitudinal_profiles.hpp"
 #include "road/surface.hpp"
 
 namespace ssrfleet::road {
@@ -22,5 +25,18 @@ struct LateralBracket {
 LateralBracket bracket(const Surface& surface, double z_m);
 
 Eigen::ArrayXd wheel_path(const Surface& surface, double z_m);
+
+// The wheel path at z, refusing one that reads a missing cell (missing_cells.hpp): DataError
+// naming the surface, z, and how many missing cells it crosses and where the first is.
+Eigen::ArrayXd complete_wheel_path(const Surface& surface, double z_m);
+
+// The wheel paths at zs as longitudinal profiles (to write as ERD), labelled "z=<z>m";
+// complete_wheel_path's errors.
+LongitudinalProfiles wheel_path_profiles(const Surface& surface, const std::vector<double>& zs_m);
+
+// The wheel paths roughness is reported for when none are named: a truck's two wheel paths, a
+// 1.8 m track centred on the surface (centre -/+ 0.9 m), or the centre line alone when the
+// surface is narrower than the track.
+std::vector<double> default_wheel_paths_m(const Surface& surface);
 
 }  // namespace ssrfleet::road

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -67,7 +68,26 @@ void TruckBatch::resize(Eigen::Index n) {
 Site::Site(road::Surface raw_surface, SiteOptions options)
     : surface_(road::envelop((options.validate(), raw_surface), options.envelopment_m)),
       options_(std::move(options)),
-      integrator_(make_integrator(surface_, options_.sensors)) {}
+      integrator_(make_integrator(surface_, options_.sensors)),
+      raw_missing_(road::find_missing(raw_surface)),
+      measured_to_m_(std::numeric_limits<double>::infinity()) {
+  // The envelopment filter spreads a hole over its window, so the enveloped surface says which
+  // samples a pass may read. A pass to x reads the samples up to the one after x (the profile is
+  // linear between samples), hence two samples of margin before the first unmeasured one.
+  const Eigen::Index first = road::first_row_with_missing(surface_);
+  if (first < surface_.samples()) measured_to_m_ = surface_.dx_m * static_cast<double>(first - 2);
+  if (!integrator_.positions_m().empty()) check_measured_up_to(integrator_.positions_m().back());
+}
+
+void Site::check_measured_up_to(double x_m) const {
+  if (x_m <= measured_to_m_) return;
+  std::ostringstream os;
+  os << "the trucks' stretch, x = 0 to " << x_m << " m across the whole width (y = " << surface_.y0_m << " to "
+     << surface_.y_max_m() << " m, where a truck may drive), crosses missing road: the surface has "
+     << road::describe(raw_missing_, surface_)
+     << " (missing cells beyond the last sensor are allowed: crop the surface to measured road or move the sensors)";
+  throw DataError(surface_.name, 0, "missing cells", os.str());
+}
 
 vehicle::WheelPath Site::wheel_path(double lateral_m) const {
   const road::LateralBracket b = road::bracket(surface_, lateral_m);
@@ -92,6 +112,7 @@ void Site::impact_factors(const TruckBatch& trucks, Eigen::Ref<Eigen::ArrayXXd> 
 
 void Site::impact_factors_at(const vehicle::PassIntegrator& integrator, const TruckBatch& trucks,
                              Eigen::Ref<Eigen::ArrayXXd> if_out, Eigen::ArrayXd* min_if) const {
+  if (!integrator.positions_m().empty()) check_measured_up_to(integrator.positions_m().back());
   const Eigen::Index n = trucks.size();
   vehicle::QuarterCarBatch cars;
   cars.sprung_mass_kg = trucks.sprung_mass_kg;

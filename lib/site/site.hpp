@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "road/missing_cells.hpp"
 #include "road/surface.hpp"
 #include "site/sensor_array.hpp"
 #include "vehicle/pass_integrator.hpp"
@@ -42,7 +43,10 @@ struct TruckBatch {
 class Site {
  public:
   // Applies the envelopment filter to the raw surface and checks that every sensor lies on the
-  // road (UsageError: "sensor 16 at 120 m is beyond the road's end at 100 m").
+  // road (UsageError: "sensor 16 at 120 m is beyond the road's end at 100 m") and that the
+  // trucks' stretch, x = 0 to the last sensor across the whole width (a truck may sit anywhere
+  // across the surface), reads no missing cell (DataError naming the road and the first missing
+  // cell). Missing cells beyond the last sensor are allowed.
   Site(road::Surface raw_surface, SiteOptions options);
 
   const road::Surface& surface() const { return surface_; }
@@ -64,7 +68,8 @@ class Site {
   void impact_factors(const TruckBatch& trucks, Eigen::Ref<Eigen::ArrayXXd> if_out,
                       Eigen::ArrayXd* min_if = nullptr) const;
 
-  // The same with an integrator built for other output positions (e.g. predict anywhere).
+  // The same with an integrator built for other output positions (e.g. predict anywhere); a
+  // position whose pass would read a missing cell is a DataError, as in the constructor.
   void impact_factors_at(const vehicle::PassIntegrator& integrator, const TruckBatch& trucks,
                          Eigen::Ref<Eigen::ArrayXXd> if_out, Eigen::ArrayXd* min_if = nullptr) const;
 
@@ -74,9 +79,14 @@ class Site {
   std::string fingerprint() const;
 
  private:
+  // DataError unless a pass to x_m reads only measured road.
+  void check_measured_up_to(double x_m) const;
+
   road::Surface surface_;
   SiteOptions options_;
   vehicle::PassIntegrator integrator_;
+  road::MissingCells raw_missing_;  // in the raw surface, for messages
+  double measured_to_m_;            // a pass may run this far and read no missing cell
 };
 
 }  // namespace ssrfleet::site
