@@ -47,6 +47,8 @@ int run_diagnose(int argc, const char* const argv[]) {
       ("holdout", po::value(&o.holdout_fraction)->default_value(o.holdout_fraction),
        "share of the trucks (the last ones) that score held-out skill")
       ("candidates", po::value(&candidates), ("extensions to consider, comma-separated (default: all of " + catalogue + ")").c_str())
+      ("max-effects", po::value(&o.max_effects)->default_value(o.max_effects),
+       "effects added at most: after each, diagnose checks again and looks for the next while a check fails")
       ("shortlist-only", po::bool_switch(&o.shortlist_only),
        "refit only candidates that a failed check points at (faster; misses effects the checks cannot see)")
       ("draws", po::value(&o.draws)->default_value(o.draws), "posterior draws behind the checks")

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <iomanip>
 #include <limits>
 #include <map>
@@ -14,6 +15,7 @@
 #include "fleet/online_fit.hpp"
 #include "fleet/replay.hpp"
 #include "model/model_extension.hpp"
+#include "model/model_spec.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::discrepancy {
@@ -115,6 +117,112 @@ std::string fmt(double v, int precision) {
 
 }  // namespace
 
+namespace {
+
+bool any_flagged(const CheckReport& report) {
+  return std::any_of(report.checks.begin(), report.checks.end(), [](const CheckResult& c) { return c.flagged; });
+}
+
+// The failed checks and what each points at, for an "unexplained" verdict: which family, its
+// p-value, and the sensor a per-sensor family singles out.
+std::string where_misfit_sits(const CheckReport& report, int sensors) {
+  std::string s;
+  for (const auto& c : report.checks) {
+    if (!c.flagged) continue;
+    s += (s.empty() ? "" : "; ") + std::string(fleet::check_name(c.kind)) + " (p = " + fmt(c.p_value, 4);
+    if (c.sensor >= 1 && c.sensor <= sensors) s += ", worst at sensor " + std::to_string(c.sensor);
+    s += ")";
+  }
+  return s;
+}
+
+// One round of the search: the current model plus each candidate, refitted; the one added (if any).
+struct Round {
+  std::vector<CandidateResult> candidates;
+  std::vector<std::string> alternatives;
+  Fitted best;  // online is null when no candidate is supported
+  std::string effect;
+  double log_bayes_factor = 0.0, heldout_gain = 0.0;
+};
+
+Round next_effect(const site::Site& site, const std::vector<records::WimRecord>& records, std::size_t heldout_from,
+                  const Fitted& current, const std::string& spec, std::vector<std::string> names,
+                  const CheckReport& checks, const DiagnoseOptions& o, const std::function<void(const std::string&)>& say) {
+  Round out;
+  // The shortlist first (a stable order otherwise), so progress shows the likeliest first.
+  std::map<std::string, bool> shortlisted;
+  for (const auto& name : names) shortlisted[name] = !matched_checks(*fleet::make_extension(name, site), checks).empty();
+  std::stable_sort(names.begin(), names.end(),
+                   [&](const std::string& a, const std::string& b) { return shortlisted[a] && !shortlisted[b]; });
+  std::vector<Fitted> supported;  // refits that pass both tests, parallel to supported_index
+  std::vector<std::size_t> supported_index;
+  const std::string against = spec.empty() ? "the base model" : spec;
+  for (const auto& name : names) {
+    const auto alone = fleet::make_extension(name, site);
+    CandidateResult c;
+    c.name = name;
+    c.description = alone->description();
+    c.matched_checks = matched_checks(*alone, checks);
+    if (c.matched_checks.empty() && o.shortlist_only) {
+      c.verdict = "not refitted: no failed check in its signature";
+      out.candidates.push_back(std::move(c));
+      continue;
+    }
+    const std::string model = spec.empty() ? name : spec + "+" + name;
+    say("refitting with " + model);
+    Fitted f = fit_model(site, records, heldout_from, fleet::parse_model_spec(model, site).extension, o);
+    c.refitted = true;
+    c.fit = f.fit;
+    c.log_bayes_factor = f.fit.log_evidence - current.fit.log_evidence;
+    c.heldout_gain = f.fit.heldout_log_score - current.fit.heldout_log_score;
+    c.parameters = extension_estimates(f);
+    say("  " + model + ": log Bayes factor " + fmt(c.log_bayes_factor, 1) + " against " + against + ", held-out gain " +
+        fmt(c.heldout_gain, 1));
+    if (c.log_bayes_factor < o.min_log_bayes_factor) {
+      c.verdict = "log Bayes factor below " + fmt(o.min_log_bayes_factor, 1);
+    } else if (!(c.heldout_gain > 0.0)) {
+      c.verdict = "held-out skill not better than " + against + "'s";
+    } else {
+      supported.push_back(std::move(f));
+      supported_index.push_back(out.candidates.size());
+    }
+    out.candidates.push_back(std::move(c));
+  }
+  // The choice. Evidence first; but two effects whose log Bayes factors differ by less than the
+  // threshold are not told apart by it (the same threshold that separates an effect from the
+  // current model), and then held-out skill decides; the others within the threshold are
+  // reported as alternatives.
+  std::size_t chosen = supported.size();
+  double best_bf = -std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < supported.size(); ++k) best_bf = std::max(best_bf, out.candidates[supported_index[k]].log_bayes_factor);
+  for (std::size_t k = 0; k < supported.size(); ++k) {
+    const auto& c = out.candidates[supported_index[k]];
+    if (c.log_bayes_factor < best_bf - o.min_log_bayes_factor) continue;
+    if (chosen == supported.size() || c.heldout_gain > out.candidates[supported_index[chosen]].heldout_gain) chosen = k;
+  }
+  if (chosen == supported.size()) return out;
+  auto& pick = out.candidates[supported_index[chosen]];
+  out.effect = pick.name;
+  out.log_bayes_factor = pick.log_bayes_factor;
+  out.heldout_gain = pick.heldout_gain;
+  out.best = std::move(supported[chosen]);
+  for (std::size_t k = 0; k < supported.size(); ++k) {
+    auto& c = out.candidates[supported_index[k]];
+    if (k == chosen) {
+      c.verdict = "chosen";
+    } else if (c.log_bayes_factor >= best_bf - o.min_log_bayes_factor) {
+      c.verdict = "alternative: evidence within " + fmt(o.min_log_bayes_factor, 1) + " of " + out.effect +
+                  ", held-out skill lower";
+      out.alternatives.push_back(c.name);
+    } else {
+      c.verdict = "supported, but less than " + out.effect;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 void DiagnoseOptions::validate() const {
   if (particles < 2) throw UsageError("diagnose: particles must be at least 2");
   if (threads < 1) throw UsageError("diagnose: threads must be at least 1");
@@ -124,6 +232,7 @@ void DiagnoseOptions::validate() const {
   if (draws < 10) throw UsageError("diagnose: draws must be at least 10");
   if (replicates < 100) throw UsageError("diagnose: replicates must be at least 100");
   if (final_sweeps < -1) throw UsageError("diagnose: final sweeps must be >= 0 (or -1 for the default)");
+  if (max_effects < 1) throw UsageError("diagnose: max effects must be at least 1");
 }
 
 DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRecord>& records, const DiagnoseOptions& o) {
@@ -156,92 +265,66 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
     say("  " + std::string(fleet::check_name(c.kind)) + ": p = " + fmt(c.p_value, 4) + (c.flagged ? "  FAILED" : ""));
   }
 
-  // The shortlist first (a stable order otherwise), so progress shows the likeliest first.
-  std::map<std::string, bool> shortlisted;
-  for (const auto& name : names) shortlisted[name] = !matched_checks(*fleet::make_extension(name, site), r.checks_before).empty();
-  std::stable_sort(names.begin(), names.end(),
-                   [&](const std::string& a, const std::string& b) { return shortlisted[a] && !shortlisted[b]; });
-  std::vector<Fitted> supported;  // refits that pass both tests, parallel to supported_index
-  std::vector<std::size_t> supported_index;
-  for (const auto& name : names) {
-    auto ext = fleet::make_extension(name, site);
-    CandidateResult c;
-    c.name = name;
-    c.description = ext->description();
-    c.matched_checks = matched_checks(*ext, r.checks_before);
-    if (c.matched_checks.empty() && o.shortlist_only) {
-      c.verdict = "not refitted: no failed check in its signature";
-      r.candidates.push_back(std::move(c));
-      continue;
+  // Effect by effect: each round refits the current model plus each remaining candidate, adds the
+  // one the evidence and held-out skill support, and checks again; later rounds run only while a
+  // check still fails (a gap remains).
+  std::string spec;  // the current model's effects ("" = base)
+  Fitted current = std::move(base);
+  CheckReport current_checks = r.checks_before;
+  for (int round = 0; round < o.max_effects; ++round) {
+    if (round > 0 && !any_flagged(current_checks)) break;
+    std::vector<std::string> remaining;
+    for (const auto& name : names) {
+      if (std::find(r.effects.begin(), r.effects.end(), name) == r.effects.end()) remaining.push_back(name);
     }
-    say("refitting with " + name);
-    Fitted f = fit_model(site, records, heldout_from, std::move(ext), o);
-    c.refitted = true;
-    c.fit = f.fit;
-    c.log_bayes_factor = f.fit.log_evidence - base.fit.log_evidence;
-    c.heldout_gain = f.fit.heldout_log_score - base.fit.heldout_log_score;
-    c.parameters = extension_estimates(f);
-    say("  " + name + ": log Bayes factor " + fmt(c.log_bayes_factor, 1) + ", held-out gain " + fmt(c.heldout_gain, 1));
-    if (c.log_bayes_factor < o.min_log_bayes_factor) {
-      c.verdict = "log Bayes factor below " + fmt(o.min_log_bayes_factor, 1);
-    } else if (!(c.heldout_gain > 0.0)) {
-      c.verdict = "held-out skill not better than the base model's";
-    } else {
-      supported.push_back(std::move(f));
-      supported_index.push_back(r.candidates.size());
+    if (remaining.empty()) break;
+    if (round > 0) say("a gap remains with " + spec + ": looking for another effect");
+    Round next = next_effect(site, records, heldout_from, current, spec, remaining, current_checks, o, say);
+    if (round == 0) {
+      r.candidates = next.candidates;
+      r.alternatives = next.alternatives;
     }
-    r.candidates.push_back(std::move(c));
+    DiagnoseStep step;
+    step.candidates = std::move(next.candidates);
+    if (!next.best.online) {
+      r.steps.push_back(std::move(step));
+      break;
+    }
+    spec = spec.empty() ? next.effect : spec + "+" + next.effect;
+    r.effects.push_back(next.effect);
+    current = std::move(next.best);
+    say("posterior predictive checks with " + spec);
+    current_checks = check(site, current, o);
+    step.effect = next.effect;
+    step.model = spec;
+    step.log_bayes_factor = next.log_bayes_factor;
+    step.heldout_gain = next.heldout_gain;
+    step.checks = current_checks;
+    r.steps.push_back(std::move(step));
   }
 
-  // The choice. Evidence first; but two effects whose log Bayes factors differ by less than the
-  // threshold are not told apart by it (the same threshold that separates an effect from the
-  // base model), and then held-out skill decides; the others within the threshold are reported
-  // as alternatives.
-  std::size_t chosen = supported.size();
-  double best_bf = -std::numeric_limits<double>::infinity();
-  for (std::size_t k = 0; k < supported.size(); ++k) best_bf = std::max(best_bf, r.candidates[supported_index[k]].log_bayes_factor);
-  for (std::size_t k = 0; k < supported.size(); ++k) {
-    const auto& c = r.candidates[supported_index[k]];
-    if (c.log_bayes_factor < best_bf - o.min_log_bayes_factor) continue;
-    if (chosen == supported.size() || c.heldout_gain > r.candidates[supported_index[chosen]].heldout_gain) chosen = k;
+  const bool gap_remains = any_flagged(current_checks);
+  r.verdict = gap_remains ? "unexplained" : (r.effects.empty() ? "none" : "explained");
+  r.effect = r.effects.empty() ? r.verdict : r.effects.front();
+  r.model = spec.empty() ? "base" : spec;
+  r.checks_after = current_checks;
+  r.chosen = current.fit;
+  r.posterior = current.online->cloud();
+  if (current.extension) {
+    r.description = current.extension->description();
+    r.parameters = extension_estimates(current);
+    r.log_bayes_factor = current.fit.log_evidence - r.base.log_evidence;
+    r.heldout_gain = current.fit.heldout_log_score - r.base.heldout_log_score;
   }
-  Fitted best;
-  if (chosen < supported.size()) {
-    auto& pick = r.candidates[supported_index[chosen]];
-    r.effect = pick.name;
-    r.log_bayes_factor = pick.log_bayes_factor;
-    r.heldout_gain = pick.heldout_gain;
-    best = std::move(supported[chosen]);
-    for (std::size_t k = 0; k < supported.size(); ++k) {
-      auto& c = r.candidates[supported_index[k]];
-      if (k == chosen) {
-        c.verdict = "chosen";
-      } else if (c.log_bayes_factor >= best_bf - o.min_log_bayes_factor) {
-        c.verdict = "alternative: evidence within " + fmt(o.min_log_bayes_factor, 1) + " of " + r.effect +
-                    ", held-out skill lower";
-        r.alternatives.push_back(c.name);
-      } else {
-        c.verdict = "supported, but less than " + r.effect;
-      }
-    }
-  }
-
-  if (best.online) {
-    r.description = best.extension->description();
-    r.parameters = extension_estimates(best);
-    r.chosen = best.fit;
-    say("posterior predictive checks with " + r.effect);
-    r.checks_after = check(site, best, o);
-    r.posterior = best.online->cloud();
-  } else {
-    const bool any_failed = std::any_of(r.checks_before.checks.begin(), r.checks_before.checks.end(),
-                                        [](const CheckResult& c) { return c.flagged; });
-    r.description = any_failed ? "checks failed, but no extension in the catalogue is decisively better than the base model"
-                               : "every posterior predictive check passed and no extension in the catalogue is decisively "
-                                 "better than the base model: nothing is missing that these data can reveal";
-    r.chosen = r.base;
-    r.checks_after = r.checks_before;
-    r.posterior = base.online->cloud();
+  if (gap_remains) {
+    r.description = (r.effects.empty() ? std::string("checks failed, and no extension in the catalogue is decisively "
+                                                     "better than the base model")
+                                       : "checks still fail after " + spec + ", and no further extension in the "
+                                                                              "catalogue is decisively better") +
+                    ": the misfit is unexplained; where it sits: " + where_misfit_sits(current_checks, r.sensors);
+  } else if (r.effects.empty()) {
+    r.description = "every posterior predictive check passed and no extension in the catalogue is decisively better than "
+                    "the base model: nothing is missing that these data can reveal";
   }
   r.wall_s = seconds_since(start);
   return r;

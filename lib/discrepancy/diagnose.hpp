@@ -46,6 +46,7 @@ struct DiagnoseOptions {
   int replicates = 4000;            // replicated data sets per check
   std::vector<std::string> candidates;  // empty: the whole catalogue
   bool shortlist_only = false;       // refit only candidates with a failed check in their signature
+  int max_effects = 3;               // effects added at most, one per round
   std::ostream* progress = nullptr;
 
   void validate() const;  // UsageError naming the option
@@ -76,10 +77,28 @@ struct CandidateResult {
   std::string verdict;  // why it was chosen or not
 };
 
+// One round of the search for effects: the effect added (none: the round ended the search), the
+// model after it, its evidence and skill against the model before, the checks with it.
+struct DiagnoseStep {
+  std::string effect;  // "" when no candidate was supported
+  std::string model;   // the effects so far, e.g. "sensor_gain+unsprung_mass"
+  double log_bayes_factor = 0.0, heldout_gain = 0.0;
+  CheckReport checks;  // with `model` (empty when no effect was added)
+  std::vector<CandidateResult> candidates;
+};
+
 struct DiagnoseResult {
+  // The first effect named, or "none" (no check fails and no effect is supported) or
+  // "unexplained" (checks fail and no catalogue effect is supported).
   std::string effect = "none";
+  std::vector<std::string> effects;  // every effect named, in order
+  // "none", "explained" (effects named and no check fails with them) or "unexplained" (a check
+  // still fails after the last effect added, or with none).
+  std::string verdict = "none";
+  std::string model = "base";              // the model diagnose ends with
+  std::vector<DiagnoseStep> steps;
   std::string description;                 // of the effect, or why none
-  std::vector<ParameterEstimate> parameters;  // of the chosen effect
+  std::vector<ParameterEstimate> parameters;  // of the final model's effects (effect.param with several)
   // Other supported effects whose evidence is within the threshold of the chosen one's: these
   // data cannot tell them apart by evidence (held-out skill chose).
   std::vector<std::string> alternatives;
@@ -88,9 +107,9 @@ struct DiagnoseResult {
   int trucks = 0, heldout_trucks = 0, sensors = 0;
   std::vector<double> sensor_positions_m;
   ModelFit base;
-  CheckReport checks_before, checks_after;  // after = before when the effect is none
-  ModelFit chosen;                          // = base when none
-  std::vector<CandidateResult> candidates;
+  CheckReport checks_before, checks_after;  // after: with every effect named (= before when none)
+  ModelFit chosen;                          // the final model's fit (= base when none)
+  std::vector<CandidateResult> candidates;  // the first round's
   double alpha = 0.01, min_log_bayes_factor = 3.0;
   double wall_s = 0.0;
   // The posterior diagnose ends with: the chosen effect's model (its "model" names the effect),

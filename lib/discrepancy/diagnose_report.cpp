@@ -76,8 +76,8 @@ std::string interval(const fleet::ParameterSummary& s) {
 }
 
 void write_checks_table(std::ostream& os, const DiagnoseResult& r) {
-  const bool after = r.effect != "none";
-  os << "| check | statistic | p-value (base) | failed | where |" << (after ? " p-value (with " + r.effect + ") |" : "")
+  const bool after = !r.effects.empty();
+  os << "| check | statistic | p-value (base) | failed | where |" << (after ? " p-value (with " + r.model + ") |" : "")
      << "\n|---|---|---|---|---|" << (after ? "---|" : "") << "\n";
   for (std::size_t k = 0; k < r.checks_before.checks.size(); ++k) {
     const auto& c = r.checks_before.checks[k];
@@ -92,10 +92,23 @@ void write_checks_table(std::ostream& os, const DiagnoseResult& r) {
 void write_summary(std::ostream& os, const DiagnoseResult& r) {
   os << "# ssrfleet diagnose\n\n";
   os << "**Effect: " << r.effect << "** - " << r.description << "\n\n";
+  os << "Verdict: **" << r.verdict << "**; effects named, in order: " << (r.effects.empty() ? "none" : r.model)
+     << "; the model diagnose ends with: " << r.model << ".\n\n";
+  if (r.effects.size() > 1) {
+    os << "| step | effect added | log Bayes factor against the model before | held-out gain | systematic gap after |\n"
+          "|---|---|---|---|---|\n";
+    for (std::size_t k = 0; k < r.steps.size(); ++k) {
+      const auto& st = r.steps[k];
+      if (st.effect.empty()) continue;
+      os << "| " << (k + 1) << " | " << st.effect << " | " << fixed(st.log_bayes_factor, 1) << " | "
+         << fixed(st.heldout_gain, 1) << " | " << fixed(st.checks.gap.systematic_gap, 2) << " |\n";
+    }
+    os << "\n";
+  }
   os << r.trucks << " trucks, " << r.sensors << " sensors; held-out skill scored on the last " << r.heldout_trucks
      << " trucks; checks fail at p < " << r.alpha << "; an effect needs log Bayes factor >= " << r.min_log_bayes_factor
      << " and a held-out gain > 0. Wall time " << fixed(r.wall_s, 1) << " s.\n\n";
-  if (r.effect != "none") {
+  if (!r.effects.empty()) {
     os << "log Bayes factor against the base model: " << fixed(r.log_bayes_factor, 1) << "; held-out log score gain: "
        << fixed(r.heldout_gain, 1) << "\n\n| parameter | posterior mean [95 % interval] | base model's value |\n|---|---|---|\n";
     for (const auto& p : r.parameters) {
@@ -110,7 +123,7 @@ void write_summary(std::ostream& os, const DiagnoseResult& r) {
          << "; see the candidates below).\n\n";
     }
   }
-  os << "## Gap between model and measurements\n\n| measure | base model | " << (r.effect == "none" ? "-" : r.effect)
+  os << "## Gap between model and measurements\n\n| measure | base model | " << (r.effects.empty() ? "-" : r.model)
      << " |\n|---|---|---|\n";
   os << "| RMS standardised per-sensor mean residual (about 1 or less when the model fits) | "
      << fixed(r.checks_before.gap.rms_standardised_mean, 2) << " | " << fixed(r.checks_after.gap.rms_standardised_mean, 2)
@@ -155,6 +168,21 @@ std::string residual_plot() {
       "     '' skip 1 using 2:4 with linespoints lw 2 lc rgb '#1f4e9c' pt 5 dt 2 title 'with the named effect'\n");
 }
 
+// One line per step of residual_steps.csv: base, then after each effect added.
+std::string residual_steps_plot(std::size_t steps) {
+  std::string plot =
+      "set title \"Each sensor's standardised mean residual: base model, then after each effect added\"\n"
+      "set xlabel 'position along the road (m)'\nset ylabel 'standardised mean residual (-)'\n"
+      "set grid lc rgb '#dddddd'\nset key outside top center horizontal\nset datafile separator ','\n"
+      "plot 1.96 with lines lc rgb '#999999' dt 3 notitle, -1.96 with lines lc rgb '#999999' dt 3 notitle, \\\n"
+      "     'residual_steps.csv' skip 1 using 2:3 with linespoints lw 2 pt 7 title 'base model'";
+  for (std::size_t k = 0; k < steps; ++k) {
+    plot += ", \\\n     '' skip 1 using 2:" + std::to_string(4 + k) + " with linespoints lw 2 dt " + std::to_string(2 + k) +
+            " title 'after effect " + std::to_string(k + 1) + "'";
+  }
+  return io::png_and_svg_script("residual_steps", plot + "\n", 900, 500);
+}
+
 std::string checks_plot() {
   return io::png_and_svg_script(
       "checks",
@@ -189,22 +217,9 @@ double per_sensor(const CheckReport& r, fleet::CheckKind kind, int m) {
   return static_cast<std::size_t>(m) < v.size() ? v[static_cast<std::size_t>(m)] : std::nan("");
 }
 
-}  // namespace
-
-nlohmann::json diagnosis_to_json(const DiagnoseResult& r) {
-  nlohmann::json j;
-  j["effect"] = r.effect;
-  j["description"] = r.description;
-  j["parameters"] = parameters_json(r.parameters);
-  j["alternatives"] = r.alternatives;
-  j["log_bayes_factor"] = r.log_bayes_factor;
-  j["heldout_gain"] = r.heldout_gain;
-  j["gap_before"] = gap_json(r.checks_before.gap);
-  j["gap_after"] = gap_json(r.checks_after.gap);
-  j["checks_before"] = checks_json(r.checks_before);
-  j["checks_after"] = checks_json(r.checks_after);
+nlohmann::json candidates_json(const std::vector<CandidateResult>& list) {
   nlohmann::json candidates = nlohmann::json::array();
-  for (const auto& c : r.candidates) {
+  for (const auto& c : list) {
     nlohmann::json e = {{"name", c.name},
                         {"description", c.description},
                         {"matched_checks", c.matched_checks},
@@ -219,7 +234,41 @@ nlohmann::json diagnosis_to_json(const DiagnoseResult& r) {
     }
     candidates.push_back(e);
   }
-  j["candidates"] = candidates;
+  return candidates;
+}
+
+}  // namespace
+
+nlohmann::json diagnosis_to_json(const DiagnoseResult& r) {
+  nlohmann::json j;
+  j["effect"] = r.effect;
+  j["description"] = r.description;
+  j["parameters"] = parameters_json(r.parameters);
+  j["alternatives"] = r.alternatives;
+  j["log_bayes_factor"] = r.log_bayes_factor;
+  j["heldout_gain"] = r.heldout_gain;
+  j["gap_before"] = gap_json(r.checks_before.gap);
+  j["gap_after"] = gap_json(r.checks_after.gap);
+  j["checks_before"] = checks_json(r.checks_before);
+  j["checks_after"] = checks_json(r.checks_after);
+  j["effects"] = r.effects;
+  j["verdict"] = r.verdict;
+  j["model"] = r.model;
+  j["candidates"] = candidates_json(r.candidates);
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& step : r.steps) {
+    nlohmann::json e = {{"effect", step.effect.empty() ? nlohmann::json(nullptr) : nlohmann::json(step.effect)},
+                        {"candidates", candidates_json(step.candidates)}};
+    if (!step.effect.empty()) {
+      e["model"] = step.model;
+      e["log_bayes_factor"] = step.log_bayes_factor;
+      e["heldout_gain"] = step.heldout_gain;
+      e["gap"] = gap_json(step.checks.gap);
+      e["checks"] = checks_json(step.checks);
+    }
+    steps.push_back(e);
+  }
+  j["steps"] = steps;
   j["base"] = fit_json(r.base);
   j["chosen"] = fit_json(r.chosen);
   j["trucks"] = r.trucks;
@@ -285,11 +334,32 @@ std::vector<std::string> write_diagnosis_files(const std::string& dir, const Dia
       }
     };
     rows("base", before);
-    if (r.effect != "none") rows(r.effect, after);
+    for (const auto& step : r.steps) {
+      if (!step.effect.empty()) rows(step.model, step.checks);
+    }
+  });
+  // The gap at each step: every sensor's standardised mean residual before, after the first
+  // effect, after the second, ...
+  std::vector<const DiagnoseStep*> added;
+  for (const auto& step : r.steps) {
+    if (!step.effect.empty()) added.push_back(&step);
+  }
+  write("residual_steps.csv", [&](std::ostream& os) {
+    os << std::setprecision(6) << "sensor,position_m,base";
+    for (const auto* step : added) os << ',' << step->model;
+    os << '\n';
+    for (int m = 0; m < r.sensors; ++m) {
+      const auto k = static_cast<std::size_t>(m);
+      os << (m + 1) << ',' << r.sensor_positions_m[k] << ',' << before.gap.standardised_mean[k];
+      for (const auto* step : added) os << ',' << step->checks.gap.standardised_mean[k];
+      os << '\n';
+    }
   });
   write("summary.md", [&](std::ostream& os) { write_summary(os, r); });
   write("report.json", [&](std::ostream& os) { os << diagnosis_to_json(r).dump(1) << '\n'; });
-  const std::vector<io::PlotScript> scripts = {{"residual_pattern", residual_plot()}, {"checks", checks_plot()}};
+  const std::vector<io::PlotScript> scripts = {{"residual_pattern", residual_plot()},
+                                               {"checks", checks_plot()},
+                                               {"residual_steps", residual_steps_plot(added.size())}};
   for (const auto& s : scripts) write(s.name + ".gp", [&](std::ostream& os) { os << s.script; });
   bool ok = false;
   if (plots && io::gnuplot_available()) {
