@@ -1,8 +1,5 @@
 #include "predict/ssr_prediction.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <limits>
 #include <string>
 
 #include <boost/random/mersenne_twister.hpp>
