@@ -3,6 +3,7 @@
 #include <charconv>
 #include <functional>
 #include <iostream>
+#include <cmath>
 #include <sstream>
 
 #include "io/atomic_file.hpp"
@@ -101,6 +102,50 @@ std::vector<records::WimRecord> read_site_log(const std::string& path, const sit
                         std::to_string(site.sensors()) + " (--sensors " + flags.sensors + ")");
   }
   return records;
+}
+
+// "76,77.5,80" or "FIRST:STEP:LAST" (inclusive, e.g. 76:0.05:98.5).
+std::vector<double> parse_positions(const std::string& text) {
+  std::vector<double> p;
+  if (text.empty()) return p;
+  const auto number = [&](const std::string& s) {
+    try {
+      std::size_t used = 0;
+      const double v = std::stod(s, &used);
+      if (used != s.size()) throw std::invalid_argument(s);
+      return v;
+    } catch (const std::logic_error&) {
+      throw UsageError("--positions '" + text + "': '" + s + "' is not a number");
+    }
+  };
+  if (text.find(':') != std::string::npos) {
+    std::stringstream ss(text);
+    std::string a, b, c;
+    if (!std::getline(ss, a, ':') || !std::getline(ss, b, ':') || !std::getline(ss, c)) {
+      throw UsageError("--positions '" + text + "': expected FIRST:STEP:LAST");
+    }
+    const double first = number(a), step = number(b), last = number(c);
+    if (!(step > 0.0) || last < first) throw UsageError("--positions '" + text + "': need STEP > 0 and LAST >= FIRST");
+    const auto n = static_cast<long>(std::floor((last - first) / step + 1e-9)) + 1;
+    if (n > 1'000'000) throw UsageError("--positions '" + text + "': more than a million positions");
+    for (long i = 0; i < n; ++i) p.push_back(first + static_cast<double>(i) * step);
+    return p;
+  }
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) p.push_back(number(item));
+  for (std::size_t i = 1; i < p.size(); ++i) {
+    if (!(p[i] > p[i - 1])) throw UsageError("--positions '" + text + "': positions must be strictly increasing");
+  }
+  return p;
+}
+
+void require_fitted_site(const fleet::PosteriorCloud& cloud, const std::string& posterior_path, const site::Site& site,
+                         const std::string& hint) {
+  if (cloud.site_fingerprint == site.fingerprint()) return;
+  throw UsageError("the posterior in '" + posterior_path + "' was fitted on another site (road '" + cloud.road_name +
+                   "', fingerprint " + cloud.site_fingerprint + ") than road '" + site.surface().name +
+                   "' with these site options (fingerprint " + site.fingerprint() + ")" + hint);
 }
 
 }  // namespace ssrfleet::cli

@@ -9,6 +9,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "fleet/posterior_cloud.hpp"
 #include "io/wim_log.hpp"
 #include "site/site.hpp"
 
@@ -44,6 +45,14 @@ std::uint64_t parse_seed(const std::string& text, const std::string& option = "-
 // Reads a whole WIM log for `site`: DataError (line 1, the first IF column) when its sensor
 // count is not the site's, naming the --sensors value in use.
 std::vector<records::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags);
+
+// Positions along the road: "76,77.5,80" or "FIRST:STEP:LAST" (inclusive, e.g. 76:0.05:98.5);
+// "" = none (the caller's default). UsageError naming --positions when malformed.
+std::vector<double> parse_positions(const std::string& text);
+
+// UsageError unless the posterior was fitted on `site` (same fingerprint); `hint` ends the message.
+void require_fitted_site(const fleet::PosteriorCloud& cloud, const std::string& posterior_path, const site::Site& site,
+                         const std::string& hint);
 
 // Writes through `write` to `path` atomically, or to stdout when path is "-" or empty.
 void write_output(const std::string& path, const std::function<void(std::ostream&)>& write);

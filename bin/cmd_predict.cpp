@@ -1,7 +1,6 @@
 // ssrfleet predict: the SSR prediction (mean IF, 95 % prediction limits, 95 % band of the mean
 // pattern) from a posterior file, at the sensors or any positions, on the fitted road or another.
 #include <iostream>
-#include <sstream>
 #include <string>
 
 #include "cli_common.hpp"
@@ -12,44 +11,6 @@
 #include "util/errors.hpp"
 
 namespace ssrfleet::cli {
-
-namespace {
-// "76,77.5,80" or "FIRST:STEP:LAST" (inclusive, e.g. 76:0.05:98.5).
-std::vector<double> parse_positions(const std::string& text) {
-  std::vector<double> p;
-  if (text.empty()) return p;
-  const auto number = [&](const std::string& s) {
-    try {
-      std::size_t used = 0;
-      const double v = std::stod(s, &used);
-      if (used != s.size()) throw std::invalid_argument(s);
-      return v;
-    } catch (const std::logic_error&) {
-      throw UsageError("--positions '" + text + "': '" + s + "' is not a number");
-    }
-  };
-  if (text.find(':') != std::string::npos) {
-    std::stringstream ss(text);
-    std::string a, b, c;
-    if (!std::getline(ss, a, ':') || !std::getline(ss, b, ':') || !std::getline(ss, c)) {
-      throw UsageError("--positions '" + text + "': expected FIRST:STEP:LAST");
-    }
-    const double first = number(a), step = number(b), last = number(c);
-    if (!(step > 0.0) || last < first) throw UsageError("--positions '" + text + "': need STEP > 0 and LAST >= FIRST");
-    const auto n = static_cast<long>(std::floor((last - first) / step + 1e-9)) + 1;
-    if (n > 1'000'000) throw UsageError("--positions '" + text + "': more than a million positions");
-    for (long i = 0; i < n; ++i) p.push_back(first + static_cast<double>(i) * step);
-    return p;
-  }
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) p.push_back(number(item));
-  for (std::size_t i = 1; i < p.size(); ++i) {
-    if (!(p[i] > p[i - 1])) throw UsageError("--positions '" + text + "': positions must be strictly increasing");
-  }
-  return p;
-}
-}  // namespace
 
 int run_predict(int argc, const char* const argv[]) {
   std::string posterior_path, road = "AS1", out = "-", positions, seed_text = "1";
@@ -82,12 +43,7 @@ int run_predict(int argc, const char* const argv[]) {
   options.traffic_bootstrap = !fixed_traffic;
   const auto cloud = io::read_posterior_file(posterior_path);
   const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
-  if (!new_road && cloud.site_fingerprint != site.fingerprint()) {
-    throw UsageError("the posterior in '" + posterior_path + "' was fitted on another site (road '" + cloud.road_name +
-                     "', fingerprint " + cloud.site_fingerprint + ") than road '" + site.surface().name +
-                     "' with these site options (fingerprint " + site.fingerprint() +
-                     "); pass --new-road to predict for a different road on purpose");
-  }
+  if (!new_road) require_fitted_site(cloud, posterior_path, site, "; pass --new-road to predict for a different road on purpose");
   const auto prediction = predict::predict_ssr(cloud, site, parse_positions(positions), options);
   write_output(out, [&](std::ostream& os) { predict::write_prediction_csv(os, prediction); });
   if (!quiet) {

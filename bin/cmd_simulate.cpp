@@ -8,16 +8,35 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "fleet/simulator.hpp"
+#include "io/force_log.hpp"
+#include "io/static_weights_csv.hpp"
 #include "io/truck_list_csv.hpp"
 #include "io/wim_log.hpp"
 #include "model/model_spec.hpp"
 #include "model/fleet_distribution.hpp"
 #include "site/road_source.hpp"
 #include "util/errors.hpp"
+#include "vehicle/quarter_car.hpp"
 
 namespace ssrfleet::cli {
 
 namespace {
+// The tyre forces the sensors read: the observed IF (model + noise) times the static wheel load.
+std::vector<records::ForceRecord> to_force_records(const std::vector<records::WimRecord>& records, double unsprung_mass_kg) {
+  std::vector<records::ForceRecord> out;
+  out.reserve(records.size());
+  for (const auto& r : records) {
+    records::ForceRecord f;
+    f.truck_id = r.truck_id;
+    f.time_s = r.time_s;
+    f.speed_mps = r.speed_mps;
+    f.sprung_mass_kg = r.sprung_mass_kg;
+    f.force_n = r.impact_factor * ((unsprung_mass_kg + r.sprung_mass_kg) * vehicle::gravity_mps2);
+    out.push_back(std::move(f));
+  }
+  return out;
+}
+
 bool is_count(const std::string& s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
 }
@@ -25,8 +44,9 @@ bool is_count(const std::string& s) {
 
 int run_simulate(int argc, const char* const argv[]) {
   std::string road = "AS1", trucks_arg = "100", out = "-", truth, seed_text = "1", effect;
+  std::string static_weights;
   double noise = 0.02;
-  bool quiet = false;
+  bool quiet = false, forces = false, no_sprung_mass = false;
   SiteFlags site_flags;
   fleet::FleetDistribution dist;
   po::options_description desc("simulate options");
@@ -44,6 +64,12 @@ int run_simulate(int argc, const char* const argv[]) {
        "parameter given (e.g. sensor_gain:sensor=5,gain=1.05+tyre_damping:c_t=400; see `ssrfleet diagnose --help` for "
        "the catalogue)")
       ("effect", po::value(&effect), "the same as --model (one effect or several joined by '+')")
+      ("forces", po::bool_switch(&forces),
+       "log raw tyre forces force_1..force_M (N) instead of impact factors: a log for `ssrfleet weigh`")
+      ("no-sprung-mass", po::bool_switch(&no_sprung_mass),
+       "with --forces, leave the sprung_mass_kg column out (the static weight is what weigh estimates)")
+      ("static-weights", po::value(&static_weights),
+       "also write each truck's true static wheel load here (truck_id,static_kn,sprung_mass_kg)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   site_flags.add_to(desc);
   po::options_description fleet_desc("fleet distribution (paper Table 1 defaults)");
@@ -62,11 +88,13 @@ int run_simulate(int argc, const char* const argv[]) {
   desc.add(fleet_desc);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, nullptr, vm,
-                     "usage: ssrfleet simulate [--road AS1|FILE] [--trucks N|FILE] [--noise S] [--seed K] [--out FILE]")) {
+                     "usage: ssrfleet simulate [--road AS1|FILE] [--trucks N|FILE] [--noise S] [--seed K] [--out FILE]\n"
+                     "       [--forces [--no-sprung-mass]] [--static-weights FILE]")) {
     return 0;
   }
   const std::uint64_t seed = parse_seed(seed_text);
   if (!(noise >= 0.0)) throw UsageError("--noise " + std::to_string(noise) + ": must be >= 0");
+  if (no_sprung_mass && !forces) throw UsageError("--no-sprung-mass needs --forces (an IF log needs the mass that normalises it)");
 
   const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   std::vector<records::Truck> trucks;
@@ -85,8 +113,16 @@ int run_simulate(int argc, const char* const argv[]) {
     os << "# ssrfleet " << SSRFLEET_VERSION << " simulate: road " << site.surface().name << ", "
        << trucks.size() << " trucks, noise " << noise << ", seed " << seed << ", site " << site.fingerprint()
        << (setting.extension ? ", model " + setting.text : "") << "\n";
-    io::write_wim_log(os, log.records);
+    if (forces) {
+      io::write_force_log(os, to_force_records(log.records, site.options().unsprung_mass_kg), !no_sprung_mass);
+    } else {
+      io::write_wim_log(os, log.records);
+    }
   });
+  if (!static_weights.empty()) {
+    write_output(static_weights,
+                 [&](std::ostream& os) { io::write_true_static_weights_csv(os, log.trucks, site.options().unsprung_mass_kg); });
+  }
   if (!truth.empty()) write_output(truth, [&](std::ostream& os) { io::write_truck_list(os, log.trucks); });
 
   if (log.lift_offs > 0) {

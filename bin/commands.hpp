@@ -11,5 +11,7 @@ int run_predict(int argc, const char* const argv[]);
 int run_stream(int argc, const char* const argv[]);
 int run_reproduce(int argc, const char* const argv[]);
 int run_diagnose(int argc, const char* const argv[]);
+int run_damage(int argc, const char* const argv[]);
+int run_weigh(int argc, const char* const argv[]);
 
 }  // namespace ssrfleet::cli

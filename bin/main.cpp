@@ -26,6 +26,8 @@ const std::map<std::string, Command>& commands() {
       {"stream", {ssrfleet::cli::run_stream, "update the posterior truck by truck from a live WIM stream (crash-safe)"}},
       {"predict", {ssrfleet::cli::run_predict, "predict the SSR pattern from a posterior, on this road or another"}},
       {"diagnose", {ssrfleet::cli::run_diagnose, "find, name and fit the effect the model misses (checks, extensions, Bayes factors)"}},
+      {"damage", {ssrfleet::cli::run_damage, "damage along the road: fourth-power amplification, DLC, hot spots, ESAL per million trucks"}},
+      {"weigh", {ssrfleet::cli::run_weigh, "SSR-corrected static wheel loads from a log of raw tyre forces"}},
       {"reproduce", {ssrfleet::cli::run_reproduce, "the paper's theoretical test end to end: figure data, plots, summary.md"}},
   };
   return table;

@@ -137,10 +137,10 @@ self_test() {
     echo "check-layers self-test: FAILED: a planted smc -> road include was not reported" >&2
     return 1
   fi
-  # 4. A new folder without a line fails.
+  # 4. A new folder without a line fails (a name no real folder will take).
   cp "$root/lib/smc/engine.hpp" "$tmp/lib/smc/engine.hpp"
-  mkdir -p "$tmp/lib/weigh" && echo '#include "util/errors.hpp"' >"$tmp/lib/weigh/static_weight.cpp"
-  if check "$tmp" 2>"$tmp/new.err" || ! grep -q 'lib/weigh has no line' "$tmp/new.err"; then
+  mkdir -p "$tmp/lib/planted_unlisted" && echo '#include "util/errors.hpp"' >"$tmp/lib/planted_unlisted/planted.cpp"
+  if check "$tmp" 2>"$tmp/new.err" || ! grep -q 'lib/planted_unlisted has no line' "$tmp/new.err"; then
     cat "$tmp/new.err" >&2
     echo "check-layers self-test: FAILED: a folder without a line in the table passed" >&2
     return 1

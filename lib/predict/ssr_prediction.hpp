@@ -1,8 +1,9 @@
 // The SSR prediction of DESIGN.md §5: the posterior predictive distribution of impact factors
 // along the road. Draw θ from the weighted posterior, trucks from the fleet distribution θ
-// describes (k, k_t, z), speed and sprung mass from the observed trucks, simulate, add
-// N(0, σ_IF²). Reported per position: the mean IF, the 2.5 / 97.5 % prediction limits, and the
-// 95 % credible band of the fleet's mean pattern (the spread of the per-θ mean over θ and over a
+// describes (k, k_t, z), speed and sprung mass from the observed trucks (these draws are
+// fleet::draw_predictive_trucks, shared with damage and weigh), simulate, add N(0, σ_IF²).
+// Reported per position: the mean IF, the 2.5 / 97.5 % prediction limits, and the 95 % credible
+// band of the fleet's mean pattern (the spread of the per-θ mean over θ and over a
 // Bayesian bootstrap of the observed traffic, with as little simulation noise as stratified
 // sampling leaves).
 // Works on any site: the one fitted, or another road (paper Fig. 9).

@@ -1,0 +1,75 @@
+// ssrfleet weigh: each truck's static wheel load from its raw tyre forces, corrected for the site's
+// SSR by the fleet posterior (issue 18 item 2; weigh/static_weight.hpp has the estimator, the
+// fixed point over the unknown sprung mass, and the interval).
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "io/force_log.hpp"
+#include "io/posterior_json.hpp"
+#include "io/static_weights_csv.hpp"
+#include "site/road_source.hpp"
+#include "util/errors.hpp"
+#include "weigh/static_weight.hpp"
+
+namespace ssrfleet::cli {
+
+int run_weigh(int argc, const char* const argv[]) {
+  std::string log_path, posterior_path, road = "AS1", out = "-", seed_text = "1";
+  bool quiet = false;
+  weigh::WeighOptions options;
+  SiteFlags site_flags;
+  po::options_description desc("weigh options");
+  desc.add_options()
+      ("help,h", "show this help")
+      ("log", po::value(&log_path)->required(), "force log: truck_id, speed_mps, force_1..force_M (N); sprung_mass_kg optional, unused")
+      ("posterior", po::value(&posterior_path)->required(), "posterior file from fit, or a stream's state directory")
+      ("road", po::value(&road)->default_value(road), "road surface the posterior was fitted on: preset AS1|AS2|AS3 or a road CSV file")
+      ("draws", po::value(&options.prediction.theta_draws)->default_value(options.prediction.theta_draws),
+       "posterior draws of theta per predicted IF pattern")
+      ("trucks-per-draw", po::value(&options.prediction.trucks_per_draw)->default_value(options.prediction.trucks_per_draw),
+       "simulated trucks per theta draw (their spread gives the IF covariance)")
+      ("tolerance", po::value(&options.relative_tolerance)->default_value(options.relative_tolerance, "1e-6"),
+       "fixed point: stop when a step moves the estimate by less than this fraction")
+      ("max-iterations", po::value(&options.max_iterations)->default_value(options.max_iterations),
+       "fixed point: give up (an error) after this many steps")
+      ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (the same draws for every truck and step)")
+      ("out,o", po::value(&out)->default_value(out), "weights CSV to write ('-' = standard output)")
+      ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
+  site_flags.add_to(desc);
+  po::positional_options_description positional;
+  positional.add("log", 1);
+  po::variables_map vm;
+  if (!parse_or_help(argc, argv, desc, &positional, vm,
+                     "usage: ssrfleet weigh FORCES.csv --posterior FILE [--road AS1|FILE] [--out weights.csv]")) {
+    return 0;
+  }
+  options.prediction.seed = parse_seed(seed_text);
+  options.validate();
+  const auto cloud = io::read_posterior_file(posterior_path);
+  const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
+  require_fitted_site(cloud, posterior_path, site, "; weigh needs the road and site options the posterior was fitted with");
+  const auto records = io::read_force_log_file(log_path, site.sensors(), "(--sensors " + site_flags.sensors + ")");
+
+  std::vector<records::StaticWeight> weights;
+  weights.reserve(records.size());
+  long steps = 0;
+  for (const auto& record : records) {
+    weights.push_back(weigh::estimate_static_weight(cloud, site, record, log_path, options));
+    steps += weights.back().iterations;
+    if (!quiet && (weights.size() % 100 == 0 || weights.size() == records.size())) {
+      std::cerr << "ssrfleet weigh: truck " << weights.size() << "/" << records.size() << "\n";
+    }
+  }
+  write_output(out, [&](std::ostream& os) { io::write_static_weights_csv(os, weights); });
+  if (!quiet) {
+    std::cerr << "ssrfleet weigh: " << weights.size() << " trucks, " << static_cast<double>(steps) / static_cast<double>(weights.size())
+              << " fixed-point steps per truck on average, posterior of " << cloud.trucks_seen << " trucks on road "
+              << site.surface().name << "\n";
+  }
+  return 0;
+}
+
+}  // namespace ssrfleet::cli

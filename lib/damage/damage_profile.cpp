@@ -1,0 +1,161 @@
+#include "damage/damage_profile.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <boost/random/mersenne_twister.hpp>
+
+#include "fleet/predictive_trucks.hpp"
+#include "util/errors.hpp"
+#include "util/quantile.hpp"
+#include "vehicle/quarter_car.hpp"
+
+namespace ssrfleet::damage {
+
+void DamageOptions::validate() const {
+  if (theta_draws < 2) throw UsageError("--draws is " + std::to_string(theta_draws) + ", but must be >= 2");
+  if (trucks_per_draw < 1) throw UsageError("--trucks-per-draw is " + std::to_string(trucks_per_draw) + ", but must be >= 1");
+  if (!(hot_spot_threshold > 0.0) || !std::isfinite(hot_spot_threshold)) {
+    throw UsageError("--threshold is " + std::to_string(hot_spot_threshold) + ", but must be a finite number > 0");
+  }
+  const auto all = powers();
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (!(all[i] > 0.0) || !std::isfinite(all[i]) || all[i] > 20.0) {
+      throw UsageError("--power " + std::to_string(all[i]) + ": a power must be in (0, 20]");
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (all[j] == all[i]) throw UsageError("--power " + std::to_string(all[i]) + " is asked twice (1 and 4 are always reported)");
+    }
+  }
+}
+
+std::vector<double> DamageOptions::powers() const {
+  std::vector<double> p{1.0, 4.0};
+  p.insert(p.end(), extra_powers.begin(), extra_powers.end());
+  return p;
+}
+
+namespace {
+// x^n, with the integer powers (the usual ones) exact and fast.
+double power_of(double x, double n) {
+  if (n == 1.0) return x;
+  if (n == 4.0) {
+    const double x2 = x * x;
+    return x2 * x2;
+  }
+  return std::pow(x, n);
+}
+
+struct Band {
+  double mean, q025, q975;
+};
+Band band(std::vector<double>& per_draw) {
+  double sum = 0.0;
+  for (double v : per_draw) sum += v;
+  const double mean = sum / static_cast<double>(per_draw.size());
+  const double lo = quantile_type7(per_draw, 0.025), hi = quantile_type7(per_draw, 0.975);
+  return {mean, lo, hi};
+}
+}  // namespace
+
+records::DamageProfile summarise_damage(const std::vector<double>& position_m, const Eigen::ArrayXXd& wheel_if,
+                                        const Eigen::ArrayXd& static_load_n, int R, int T,
+                                        const DamageOptions& options) {
+  options.validate();
+  const auto n_pos = static_cast<Eigen::Index>(position_m.size());
+  const Eigen::Index columns = static_cast<Eigen::Index>(R) * T;
+  if (R < 2 || T < 1 || wheel_if.rows() != n_pos || wheel_if.cols() != columns || static_load_n.size() != columns) {
+    throw std::invalid_argument("summarise_damage: want positions x (R * T) impact factors and R * T static loads");
+  }
+  const std::vector<double> powers = options.powers();
+  records::DamageProfile out;
+  out.position_m = position_m;
+  out.hot_spot_threshold = options.hot_spot_threshold;
+  out.simulated_passes = static_cast<long>(columns);
+  out.lift_off_passes = static_cast<long>((wheel_if < 0.0).colwise().any().count());
+  out.dlc.resize(position_m.size());
+  out.hot_spot.resize(position_m.size());
+  out.esal_per_million.resize(position_m.size());
+  out.esal_per_million_q025.resize(position_m.size());
+  out.esal_per_million_q975.resize(position_m.size());
+  for (double n : powers) {
+    records::PowerAmplification a;
+    a.power = n;
+    a.mean.resize(position_m.size());
+    a.q025.resize(position_m.size());
+    a.q975.resize(position_m.size());
+    out.powers.push_back(std::move(a));
+  }
+
+  // ESAL of one wheel load P: (axle load / standard axle)^4 with the axle carrying two wheels.
+  const auto esal = [](double wheel_load_n) { return power_of(kWheelsPerAxle * wheel_load_n / kStandardAxleN, 4.0); };
+  double static_esal = 0.0;
+  for (Eigen::Index b = 0; b < columns; ++b) static_esal += esal(static_load_n[b]);
+  // The static damage averages over every θ draw's traffic (the bootstrap weighs the observed
+  // trucks differently per draw, equally on average).
+  out.static_esal_per_million = 1e6 * static_esal / static_cast<double>(columns);
+
+  std::vector<double> per_draw(static_cast<std::size_t>(R)), dlc_draw(static_cast<std::size_t>(R)),
+      esal_draw(static_cast<std::size_t>(R));
+  for (Eigen::Index m = 0; m < n_pos; ++m) {
+    const auto i = static_cast<std::size_t>(m);
+    for (std::size_t k = 0; k < powers.size(); ++k) {
+      for (int r = 0; r < R; ++r) {
+        double sum = 0.0;
+        for (int t = 0; t < T; ++t) sum += power_of(std::max(0.0, wheel_if(m, static_cast<Eigen::Index>(r) * T + t)), powers[k]);
+        per_draw[static_cast<std::size_t>(r)] = sum / T;
+      }
+      auto& a = out.powers[k];
+      const Band b = band(per_draw);
+      a.mean[i] = b.mean;
+      a.q025[i] = b.q025;
+      a.q975[i] = b.q975;
+      // Hot spot: the fleet's fourth-power amplification could exceed the threshold, i.e. its
+      // 95th percentile over the posterior does (per_draw is sorted by band()).
+      if (powers[k] == 4.0) out.hot_spot[i] = quantile_type7(per_draw, 0.95) > options.hot_spot_threshold;
+    }
+    for (int r = 0; r < R; ++r) {
+      // Plug-in moments over the T trucks (divide by T): the fleet's sd, consistent with a_n,
+      // which are plug-in means too.
+      double s1 = 0.0, s2 = 0.0, e = 0.0;
+      for (int t = 0; t < T; ++t) {
+        const Eigen::Index b = static_cast<Eigen::Index>(r) * T + t;
+        const double x = wheel_if(m, b);
+        s1 += x;
+        s2 += x * x;
+        e += esal(std::max(0.0, x) * static_load_n[b]);
+      }
+      const double mean = s1 / T;
+      dlc_draw[static_cast<std::size_t>(r)] = std::sqrt(std::max(0.0, s2 / T - mean * mean));
+      esal_draw[static_cast<std::size_t>(r)] = 1e6 * e / T;
+    }
+    double dlc_sum = 0.0;
+    for (double v : dlc_draw) dlc_sum += v;
+    out.dlc[i] = dlc_sum / R;
+    const Band eb = band(esal_draw);
+    out.esal_per_million[i] = eb.mean;
+    out.esal_per_million_q025[i] = eb.q025;
+    out.esal_per_million_q975[i] = eb.q975;
+  }
+  return out;
+}
+
+records::DamageProfile predict_damage(const fleet::PosteriorCloud& posterior, const site::Site& site,
+                                      std::vector<double> positions_m, const DamageOptions& options) {
+  options.validate();
+  if (positions_m.empty()) positions_m = site.sensor_positions_m();
+  const vehicle::PassIntegrator integrator(site.surface().dx_m, site.surface().samples(), positions_m);
+  boost::random::mt19937_64 engine(options.seed);
+  fleet::PredictiveTraffic traffic;
+  traffic.bootstrap = options.traffic_bootstrap;
+  const fleet::PredictiveTrucks drawn = fleet::draw_predictive_trucks(
+      posterior, site.lateral_min_m(), site.lateral_max_m(), options.theta_draws, options.trucks_per_draw, traffic, engine);
+  Eigen::ArrayXXd wheel_if(static_cast<Eigen::Index>(positions_m.size()), drawn.trucks.size());
+  site.impact_factors_at(integrator, drawn.trucks, wheel_if);
+  const Eigen::ArrayXd static_load_n =
+      (drawn.trucks.sprung_mass_kg + site.options().unsprung_mass_kg) * vehicle::gravity_mps2;
+  return summarise_damage(positions_m, wheel_if, static_load_n, options.theta_draws, options.trucks_per_draw, options);
+}
+
+}  // namespace ssrfleet::damage
