@@ -24,7 +24,7 @@ namespace ssrfleet::cli {
 
 namespace {
 
-std::vector<double> parse_positions(const std::string& text) {
+std::vector<double> parse_wheel_path_positions(const std::string& text) {
   std::vector<double> zs;
   std::stringstream in(text);
   std::string cell;
@@ -99,7 +99,7 @@ int run_road(int argc, const char* const argv[]) {
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("--classes: ") + e.what());
   }
-  if (vm.count("wheel-paths")) options.wheel_paths_m = parse_positions(wheel_paths_text);
+  if (vm.count("wheel-paths")) options.wheel_paths_m = parse_wheel_path_positions(wheel_paths_text);
 
   if (!road::is_preset_name(spec) && road::detect_road_format(spec) == road::RoadFileFormat::erd) {
     // Longitudinal profiles: each one a wheel path; there is no surface to write or to sample.
