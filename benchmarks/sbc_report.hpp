@@ -289,8 +289,8 @@ inline void write_markdown(std::ostream& f, const Settings& s, const std::vector
   f << "Independence of the L draws: smallest weight ESS of a cloud after the final sweeps " << fmt(min_ess, 0)
     << " of " << s.particles << "; smallest mean acceptance of the final sweeps " << fmt(min_acc, 2)
     << "; fewest distinct θ among the L = " << s.draws << " draws " << min_distinct << ". Equivalent ESS of the cloud "
-    << "(replications 1-" << ind.replications << " refitted with " << ind.seeds
-    << " SMC seeds each; posterior sd² over the pooled scatter² of the posterior means; 90 % interval; failed "
+    << "(replications 1-" << ind.replications << " each fitted with " << ind.seeds
+    << " SMC seeds, the run's and " << ind.seeds - 1 << " more; posterior sd² over the pooled scatter² of the posterior means; 90 % interval; failed "
        "refits: "
     << ind.failed << "):\n\n| | ";
   for (int k = 0; k < fleet::kHyperCount; ++k) f << fleet::kHyperNames[k] << " | ";
