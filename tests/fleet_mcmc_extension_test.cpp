@@ -300,29 +300,21 @@ Moments weighted_moments(const Eigen::VectorXd& x, const Eigen::ArrayXd& w) {
 //
 // One section per extension (run one alone with -c <name>; the WARN records its numbers).
 //
-// Measured (commit of this comment, 2 cores shared with other jobs; 50 trucks, 1024 particles and
-// 50 final sweeps per SMC run, 30,000 MCMC sweeps of which 25,000 kept; largest |offset| over the
-// 7 + d parameters; SMC time for its 2 runs, MCMC time for its 30,000 sweeps):
-//   second_class 0.065 sd (sigma_k2), SMC se 0.025 sd, min MCMC ESS 977 (sigma_kt); pass.
-//     SMC 201 s, MCMC 20 s. Before: one stiff truck stuck in a softer (k, k_t, z) mode in the MCMC
-//     (sigma_IF 4.2 sd off), and a label-swapped mixture mode one SMC seed gave 10 % of its weight
-//     and the MCMC never visited: now the joint latent jumps (BatchMcmcOptions::joint_jump_every)
-//     and the classes' swap (ModelExtension::stiffness_jump, in both samplers); the MCMC spends
-//     1.8 % of its sweeps in the swapped mode, the SMC seeds 1.6 % and 1.0 % of their weight.
-//   profile_defect 0.086 sd (height), SMC se 0.027 sd, MCMC ESS 521-647 on ψ; pass. SMC 270 s,
-//     MCMC 44 s. Before: ESS 7 on height, 10 on length, along the defect's length-height ridge;
-//     now both samplers walk in (position, log length, height x length^0.8).
-//   speed_bias FAILS the Monte Carlo check, on the SMC's side: its two seeds differ by 0.42 sd on
-//     sigma_kt (pooled SMC se 0.095 sd > 0.083), offset -0.30 sd on sigma_kt, <= 0.10 elsewhere;
-//     SMC 176 s, MCMC 165 s. Seed 1 keeps 10 % of its weight at sigma_kt < 60k, inside the
-//     funnel where every k_t sits at K_t (distinct particles, not copies), where seed 2 keeps
-//     0.7 % and the MCMC, which interweaves (K_t, sigma_kt), 0.8 % (a chain without the joint jumps,
-//     its sigma_kt mean within 0.002 sd of this one's): the latent SMC core has no
-//     move that carries (K_t, sigma_kt) and the k_t's out together.
-//   sensor_gain, suspension_damping, tyre_damping, unsprung_mass, re-run after the joint jumps
-//     merged (commit a79a2ad, one at a time on the shared machine): largest offsets 0.068 (sigma_kt),
-//     0.070 (sigma_kt), 0.074 (K) and 0.077 sd (K); SMC se 0.014, 0.026, 0.030, 0.030 sd; min MCMC
-//     ESS 1319, 337, 1107, 2285; pass. SMC 77, 157, 72, 81 s; MCMC 109, 76, 29, 31 s.
+// Measured at commit c2230d2 (the tyre-stiffness interweave in the latent core), 2 cores shared
+// with other jobs (load 4-8); 50 trucks, 1024 particles and 50 final sweeps per SMC run, 30,000
+// MCMC sweeps of which 25,000 kept; largest |offset| over the 7 + d parameters; two SMC runs then:
+//   sensor_gain 0.046 sd, SMC se 0.037, min MCMC ESS 1319; second_class 0.085 (share), se 0.020,
+//   ESS 977; speed_bias 0.053 (K; sigma_kt -0.002, was -0.30 before the interweave, its seeds 0.42
+//   sd apart), se 0.024, ESS 341 on the factor; suspension_damping 0.066, se 0.025, ESS 337;
+//   tyre_damping 0.067, se 0.027, ESS 1107; unsprung_mass 0.062, se 0.022, ESS 2285: all pass.
+//   SMC 144-228 s, MCMC 54-256 s each.
+//   profile_defect: offsets all under 0.25 (0.224 on the length) but the Monte Carlo check failed,
+//   0.084-0.091 > 0.083: SMC se 0.079, the runs 0.35 sd apart on the length. With four runs
+//   (kSmcRuns): largest offset 0.086 sd (length), SMC se 0.052, run-to-run sd 0.22 on length and
+//   height, MCMC ESS 521-647 on psi; pass. SMC 508 s (4 runs), MCMC 83 s.
+// Before the joint jumps and the class swap, second_class had one stiff truck stuck in a softer
+// (k, k_t, z) mode in the MCMC (sigma_IF 4.2 sd off) and a label-swapped mode one SMC seed gave 10 %
+// of its weight; before the ridge coordinates, profile_defect's MCMC had ESS 7-10 on psi.
 TEST_CASE("the latent SMC and the batch MCMC agree on every extension's posterior within a quarter sd",
           "[fleet][mcmc][smc][extension][long]") {
   constexpr int kTrucks = 50;
