@@ -240,3 +240,33 @@ TEST_CASE("diagnose names two effects hidden at once, one after the other, and t
   CHECK(find("sensor_gain.gain").q025 <= 1.06);
   CHECK(find("sensor_gain.gain").q975 >= 1.06);
 }
+
+namespace {
+// A test-only simulator of an effect outside the catalogue: the WIM sensors' sensitivity changes
+// with speed (a piezo sensor's response is not flat in frequency), so every sensor reports
+// (1 + slope (v - 20 m/s) / 20 m/s) times the true impact factor. Each truck's IFs are scaled as a
+// whole, which no truck's (k, k_t, z) can produce (they shape the pattern, not its level), and no
+// catalogue effect depends on speed that way (speed_bias shifts the frequencies, not the level).
+std::vector<records::WimRecord> speed_dependent_sensitivity_log(int trucks, double slope, std::uint64_t seed) {
+  auto records = hidden_effect_log("", trucks, seed);
+  for (auto& r : records) r.impact_factor *= 1.0 + slope * (r.speed_mps - 20.0) / 20.0;
+  return records;
+}
+}  // namespace
+
+TEST_CASE("diagnose answers unexplained when no catalogue effect closes the gap", "[discrepancy][diagnose][long]") {
+  // 60 trucks, slope 0.3: a truck 3 m/s (one sd) fast reads 4.5 % high, 2.3 noise sd of its
+  // 16-sensor mean. Every catalogue effect is refitted.
+  const auto records = speed_dependent_sensitivity_log(60, 0.3, 8);
+  const auto r = discrepancy::diagnose(as1(), records, options(256, 8));
+  INFO(discrepancy::diagnosis_to_json(r).dump(1));
+  CHECK(r.verdict == "unexplained");
+  // The base model's checks see it, and where: the residuals against speed.
+  CHECK(r.checks_before.checks[static_cast<int>(fleet::CheckKind::kSpeed)].flagged);
+  // And the best catalogue refit leaves the gap open: a check still fails with the final model.
+  bool still_failing = false;
+  for (const auto& c : r.checks_after.checks) still_failing = still_failing || c.flagged;
+  CHECK(still_failing);
+  CHECK_THAT(r.description, Catch::Contains("unexplained") && Catch::Contains("speed"));
+  if (r.effects.empty()) CHECK(r.effect == "unexplained");
+}
