@@ -1,17 +1,20 @@
-// predict with a fitted model's effects (issue 17 item 1; predict/physical_effects.hpp): the
+// predict with a fitted model's effects (issue 17 item 1; model/physical_effects.hpp): the
 // vehicle and traffic effects change the predicted force, the sensors' calibration does not, a
-// road defect stays on its road, and a replaced stiffness distribution is drawn from.
+// road defect stays on its road, and a replaced stiffness distribution is drawn from; damage keeps
+// the same, weigh the whole model (the forces it weighs went through the sensors).
 #include <cmath>
 #include <vector>
 
 #include <catch2/catch.hpp>
 
+#include "damage/damage_profile.hpp"
 #include "model/fleet_distribution.hpp"
 #include "model/fleet_model.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/road_source.hpp"
 #include "site/site.hpp"
 #include "util/errors.hpp"
+#include "weigh/predicted_impact_factors.hpp"
 
 using namespace ssrfleet;
 
@@ -89,4 +92,30 @@ TEST_CASE("predict draws the stiffness from a replaced distribution", "[predict]
 TEST_CASE("predict refuses a posterior whose draws do not fit its model", "[predict][extension]") {
   CHECK_THROWS_WITH(predict_on(cloud_with("speed_bias", {})), Catch::Contains("has 1 free parameters"));
   CHECK_THROWS_WITH(predict_on(cloud_with("warp_drive", {1.0})), Catch::Contains("unknown effect 'warp_drive'"));
+}
+
+TEST_CASE("damage keeps what the road feels of a fitted model, as predict does", "[predict][damage][extension]") {
+  damage::DamageOptions o;
+  o.theta_draws = 6;
+  o.trucks_per_draw = 40;
+  const auto biased = damage::predict_damage(cloud_with("speed_bias", {1.1}), as1(), {}, o);
+  const auto slowed = damage::predict_damage(cloud_with("base", {}, 1.0 / 1.1), as1(), {}, o);
+  const auto gained = damage::predict_damage(cloud_with("sensor_gain", {5.0, 1.1}), as1(), {}, o);
+  const auto base = damage::predict_damage(cloud_with("base", {}), as1(), {}, o);
+  for (std::size_t m = 0; m < base.dlc.size(); ++m) {
+    CHECK(biased.dlc[m] == Approx(slowed.dlc[m]).epsilon(1e-12));
+    CHECK(gained.dlc[m] == base.dlc[m]);  // the instrument's gain is not the road's load
+  }
+  CHECK(biased.dlc != base.dlc);
+}
+
+TEST_CASE("weigh predicts the sensors with the whole fitted model, a calibration gain included", "[weigh][extension]") {
+  weigh::PredictionSize size;
+  size.theta_draws = 6;
+  size.trucks_per_draw = 10;
+  const auto gained = weigh::predict_impact_factors(cloud_with("sensor_gain", {5.0, 1.1}), as1(), 20.0, 5000.0, size);
+  const auto base = weigh::predict_impact_factors(cloud_with("base", {}), as1(), 20.0, 5000.0, size);
+  for (Eigen::Index m = 0; m < base.mean.size(); ++m) {
+    CHECK(gained.mean[m] == Approx(base.mean[m] * (m == 4 ? 1.1 : 1.0)).epsilon(1e-12));
+  }
 }

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include <boost/random/mersenne_twister.hpp>
 
 #include "fleet/predictive_trucks.hpp"
+#include "model/physical_effects.hpp"
 #include "util/errors.hpp"
 #include "util/quantile.hpp"
 #include "vehicle/quarter_car.hpp"
@@ -149,10 +151,17 @@ records::DamageProfile predict_damage(const fleet::PosteriorCloud& posterior, co
   boost::random::mt19937_64 engine(options.seed);
   fleet::PredictiveTraffic traffic;
   traffic.bootstrap = options.traffic_bootstrap;
-  const fleet::PredictiveTrucks drawn = fleet::draw_predictive_trucks(
-      posterior, site.lateral_min_m(), site.lateral_max_m(), options.theta_draws, options.trucks_per_draw, traffic, engine);
+  // A fitted model's effects as predict keeps them: what the road feels (model/physical_effects.hpp).
+  const fleet::ModelSpec model = fleet::posterior_model(posterior, site);
+  std::unique_ptr<fleet::PhysicalEffects> effects;
+  if (model.extension) {
+    effects = std::make_unique<fleet::PhysicalEffects>(*model.extension, posterior.site_fingerprint == site.fingerprint());
+  }
+  const fleet::PredictiveTrucks drawn =
+      fleet::draw_predictive_trucks(posterior, site.lateral_min_m(), site.lateral_max_m(), options.theta_draws,
+                                    options.trucks_per_draw, traffic, engine, effects.get());
   Eigen::ArrayXXd wheel_if(static_cast<Eigen::Index>(positions_m.size()), drawn.trucks.size());
-  site.impact_factors_at(integrator, drawn.trucks, wheel_if);
+  fleet::simulate_predictive_trucks(site, &integrator, posterior, drawn, effects.get(), wheel_if);
   const Eigen::ArrayXd static_load_n =
       (drawn.trucks.sprung_mass_kg + site.options().unsprung_mass_kg) * vehicle::gravity_mps2;
   return summarise_damage(positions_m, wheel_if, static_load_n, options.theta_draws, options.trucks_per_draw, options);

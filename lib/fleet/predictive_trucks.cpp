@@ -8,6 +8,7 @@
 #include <boost/random/uniform_01.hpp>
 #include <boost/random/uniform_int_distribution.hpp>
 
+#include "model/extended_forward.hpp"
 #include "model/fleet_model.hpp"
 #include "model/truncated_samplers.hpp"
 #include "util/errors.hpp"
@@ -122,6 +123,49 @@ PredictiveTrucks draw_predictive_trucks(const PosteriorCloud& posterior, double 
     }
   }
   return out;
+}
+
+ModelSpec posterior_model(const PosteriorCloud& posterior, const site::Site& site) {
+  ModelSpec model;
+  if (posterior.model == "base") return model;
+  try {
+    model = parse_model_spec(posterior.model, site);
+  } catch (const UsageError& e) {
+    throw UsageError(std::string("the posterior's model cannot be rebuilt on this site: ") + e.what());
+  }
+  if (model.extension->dim() != posterior.psi.rows() ||
+      (posterior.psi.rows() > 0 && posterior.psi.cols() != posterior.theta.cols())) {
+    throw UsageError("the posterior's model '" + posterior.model + "' has " + std::to_string(model.extension->dim()) +
+                     " free parameters, its draws " + std::to_string(posterior.psi.rows()) + " rows of psi for " +
+                     std::to_string(posterior.psi.cols()) + " of " + std::to_string(posterior.theta.cols()) + " draws");
+  }
+  return model;
+}
+
+void simulate_predictive_trucks(const site::Site& site, const vehicle::PassIntegrator* integrator,
+                                const PosteriorCloud& posterior, const PredictiveTrucks& drawn,
+                                const ModelExtension* extension, Eigen::Ref<Eigen::ArrayXXd> if_out) {
+  const site::TruckBatch& batch = drawn.trucks;
+  if (extension == nullptr || !extension->edits_forward()) {
+    if (integrator != nullptr) {
+      site.impact_factors_at(*integrator, batch, if_out);
+    } else {
+      site.impact_factors(batch, if_out);
+    }
+    return;
+  }
+  const int T = drawn.trucks_per_draw;
+  std::vector<ExtendedPass> passes(static_cast<std::size_t>(batch.size()));
+  for (Eigen::Index b = 0; b < batch.size(); ++b) {
+    auto& pass = passes[static_cast<std::size_t>(b)];
+    pass.setup = base_pass(site, batch.speed_mps[b], batch.sprung_mass_kg[b], batch.stiffness_npm[b],
+                           batch.tyre_stiffness_npm[b], batch.lateral_m[b]);
+    // Every truck of one θ draw shares its ψ (and so its added profile); none when the spec fixes
+    // every parameter.
+    const Eigen::Index p = drawn.theta_index[static_cast<std::size_t>(b / T)];
+    pass.psi = posterior.psi.rows() > 0 ? posterior.psi.col(p).data() : nullptr;
+  }
+  simulate_passes(site, extension, passes, if_out, nullptr, integrator);
 }
 
 }  // namespace ssrfleet::fleet

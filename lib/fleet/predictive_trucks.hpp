@@ -13,6 +13,8 @@
 
 #include "fleet/posterior_cloud.hpp"
 #include "model/model_extension.hpp"
+#include "model/model_spec.hpp"
+#include "vehicle/pass_integrator.hpp"
 #include "site/site.hpp"
 
 namespace ssrfleet::fleet {
@@ -47,5 +49,16 @@ struct PredictiveTrucks {
 PredictiveTrucks draw_predictive_trucks(const PosteriorCloud& posterior, double lateral_min_m, double lateral_max_m,
                                         int theta_draws, int trucks_per_draw, const PredictiveTraffic& traffic,
                                         boost::random::mt19937_64& engine, const ModelExtension* model = nullptr);
+
+// The posterior's model (its "model" spec) rebuilt on `site`: a null extension for the base model.
+// UsageError when it cannot be rebuilt there or the posterior's ψ draws do not fit it.
+ModelSpec posterior_model(const PosteriorCloud& posterior, const site::Site& site);
+
+// The drawn trucks' impact factors (positions x trucks) at `integrator`'s positions on the site's
+// surface (null: the site's sensors), through `extension` (null: the base model) with each θ
+// draw's ψ from the posterior.
+void simulate_predictive_trucks(const site::Site& site, const vehicle::PassIntegrator* integrator,
+                                const PosteriorCloud& posterior, const PredictiveTrucks& drawn,
+                                const ModelExtension* extension, Eigen::Ref<Eigen::ArrayXXd> if_out);
 
 }  // namespace ssrfleet::fleet

@@ -6,9 +6,7 @@
 #include <boost/random/normal_distribution.hpp>
 
 #include "fleet/predictive_trucks.hpp"
-#include "model/extended_forward.hpp"
-#include "model/model_spec.hpp"
-#include "predict/physical_effects.hpp"
+#include "model/physical_effects.hpp"
 #include "util/errors.hpp"
 #include "util/quantile.hpp"
 
@@ -25,28 +23,12 @@ SsrPrediction predict_ssr(const fleet::PosteriorCloud& posterior, const site::Si
                           std::vector<double> positions_m, const PredictionOptions& options) {
   options.validate();
   // The fitted model's effects, rebuilt for this site from the posterior's spec; the force the
-  // road feels keeps only some of them (physical_effects.hpp).
-  fleet::ModelSpec model;
-  if (posterior.model != "base") {
-    try {
-      model = fleet::parse_model_spec(posterior.model, site);
-    } catch (const UsageError& e) {
-      throw UsageError(std::string("predict: the posterior's model cannot be rebuilt on this site: ") + e.what());
-    }
-    if (model.extension->dim() != posterior.psi.rows() ||
-        (posterior.psi.rows() > 0 && posterior.psi.cols() != posterior.theta.cols())) {
-      throw UsageError("predict: the posterior's model '" + posterior.model + "' has " +
-                       std::to_string(model.extension->dim()) + " free parameters, its draws " +
-                       std::to_string(posterior.psi.rows()) + " rows of psi for " +
-                       std::to_string(posterior.psi.cols()) + " of " + std::to_string(posterior.theta.cols()) + " draws");
-    }
+  // road feels keeps only some of them (model/physical_effects.hpp).
+  const fleet::ModelSpec model = fleet::posterior_model(posterior, site);
+  std::unique_ptr<fleet::PhysicalEffects> effects;
+  if (model.extension) {
+    effects = std::make_unique<fleet::PhysicalEffects>(*model.extension, posterior.site_fingerprint == site.fingerprint());
   }
-  // The draw's ψ (none when the spec fixes every parameter).
-  const auto psi_of = [&](Eigen::Index draw) -> const double* {
-    return posterior.psi.rows() > 0 ? posterior.psi.col(draw).data() : nullptr;
-  };
-  std::unique_ptr<PhysicalEffects> effects;
-  if (model.extension) effects = std::make_unique<PhysicalEffects>(*model.extension, posterior.site_fingerprint == site.fingerprint());
   if (positions_m.empty()) positions_m = site.sensor_positions_m();
   const vehicle::PassIntegrator integrator(site.surface().dx_m, site.surface().samples(), positions_m);
   const auto n_pos = static_cast<Eigen::Index>(positions_m.size());
@@ -66,18 +48,7 @@ SsrPrediction predict_ssr(const fleet::PosteriorCloud& posterior, const site::Si
   const site::TruckBatch& batch = drawn.trucks;
   const Eigen::ArrayXd& sigma_if = drawn.sigma_if;
   Eigen::ArrayXXd model_if(n_pos, batch.size());
-  if (effects && effects->edits_forward()) {
-    std::vector<fleet::ExtendedPass> passes(static_cast<std::size_t>(batch.size()));
-    for (Eigen::Index b = 0; b < batch.size(); ++b) {
-      auto& pass = passes[static_cast<std::size_t>(b)];
-      pass.setup = fleet::base_pass(site, batch.speed_mps[b], batch.sprung_mass_kg[b], batch.stiffness_npm[b],
-                                    batch.tyre_stiffness_npm[b], batch.lateral_m[b]);
-      pass.psi = psi_of(drawn.theta_index[static_cast<std::size_t>(b / T)]);
-    }
-    fleet::simulate_passes(site, effects.get(), passes, model_if, nullptr, &integrator);
-  } else {
-    site.impact_factors_at(integrator, batch, model_if);
-  }
+  fleet::simulate_predictive_trucks(site, &integrator, posterior, drawn, effects.get(), model_if);
 
   SsrPrediction out;
   out.position_m = positions_m;

@@ -21,10 +21,13 @@ PredictedImpactFactors predict_impact_factors(const fleet::PosteriorCloud& poste
   fleet::PredictiveTraffic traffic;
   traffic.speed_mps = speed_mps;
   traffic.sprung_mass_kg = sprung_mass_kg;
-  const fleet::PredictiveTrucks drawn =
-      fleet::draw_predictive_trucks(posterior, site.lateral_min_m(), site.lateral_max_m(), R, T, traffic, engine);
+  // A fitted model whole: the forces weighed went through the sensors (a gain included) at the
+  // logged speeds (a speed bias included), on the site it was fitted on.
+  const fleet::ModelSpec model = fleet::posterior_model(posterior, site);
+  const fleet::PredictiveTrucks drawn = fleet::draw_predictive_trucks(
+      posterior, site.lateral_min_m(), site.lateral_max_m(), R, T, traffic, engine, model.extension.get());
   Eigen::ArrayXXd model_if(site.sensors(), drawn.trucks.size());
-  site.impact_factors(drawn.trucks, model_if);
+  fleet::simulate_predictive_trucks(site, nullptr, posterior, drawn, model.extension.get(), model_if);
 
   const Eigen::Index M = model_if.rows();
   PredictedImpactFactors out;

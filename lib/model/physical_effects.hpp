@@ -1,5 +1,6 @@
 // What of a fitted model's effects a prediction of the tyre forces keeps (issue 17: predict uses
-// the extended posterior). The SSR prediction is of the force the road feels, so:
+// the extended posterior; predict and damage use this view, weigh the whole model, since the
+// forces it weighs went through the sensors). The force the road feels:
 //   - the vehicle and the traffic (edit_pass: damping, unsprung mass, the true speed behind a
 //     biased logged one) are kept, on every road;
 //   - a height the road file lacks (add_profile: profile_defect) is kept on the road it was
@@ -12,20 +13,20 @@
 
 #include "model/model_extension.hpp"
 
-namespace ssrfleet::predict {
+namespace ssrfleet::fleet {
 
-class PhysicalEffects final : public fleet::ModelExtension {
+class PhysicalEffects final : public ModelExtension {
  public:
   // inner: the fitted model's extension (outlives this); on_fitted_road: the prediction's site is
   // the one the posterior was fitted on.
-  PhysicalEffects(const fleet::ModelExtension& inner, bool on_fitted_road) : inner_(inner), on_fitted_road_(on_fitted_road) {}
+  PhysicalEffects(const ModelExtension& inner, bool on_fitted_road) : inner_(inner), on_fitted_road_(on_fitted_road) {}
 
   std::string name() const override { return inner_.name(); }
   std::string description() const override { return inner_.description(); }
-  const std::vector<fleet::ExtensionParameter>& parameters() const override { return inner_.parameters(); }
-  std::vector<fleet::CheckKind> signature() const override { return inner_.signature(); }
+  const std::vector<ExtensionParameter>& parameters() const override { return inner_.parameters(); }
+  std::vector<CheckKind> signature() const override { return inner_.signature(); }
 
-  void edit_pass(const double* psi, fleet::PassSetup& pass) const override { inner_.edit_pass(psi, pass); }
+  void edit_pass(const double* psi, PassSetup& pass) const override { inner_.edit_pass(psi, pass); }
   bool adds_profile() const override { return on_fitted_road_ && inner_.adds_profile(); }
   void add_profile(const double* psi, double dx_m, Eigen::Ref<Eigen::ArrayXd> profile) const override {
     if (adds_profile()) inner_.add_profile(psi, dx_m, profile);
@@ -39,8 +40,8 @@ class PhysicalEffects final : public fleet::ModelExtension {
   }
 
  private:
-  const fleet::ModelExtension& inner_;
+  const ModelExtension& inner_;
   bool on_fitted_road_;
 };
 
-}  // namespace ssrfleet::predict
+}  // namespace ssrfleet::fleet
