@@ -74,6 +74,9 @@ int main(int argc, char* argv[]) {
   } catch (const ssrfleet::MissingInputError& e) {
     std::cerr << prefix << e.what() << "\n";
     return 66;
+  } catch (const ssrfleet::BusyError& e) {
+    std::cerr << prefix << e.what() << "\n";
+    return 75;
   } catch (const ssrfleet::IoError& e) {
     std::cerr << prefix << e.what() << "\n";
     return 74;

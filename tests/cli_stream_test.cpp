@@ -326,3 +326,37 @@ TEST_CASE("a stream fits a model, records it in its state, and refuses to resume
   CHECK(windowed.status != 0);
   CHECK(windowed.err.find("needs the exact latent core") != std::string::npos);
 }
+
+TEST_CASE("a second stream on a live state exits at once with status 75 and the first goes on unharmed",
+          "[cli][stream]") {
+  test::TempDir dir;
+  const std::string log = dir.file("log.csv"), state = dir.file("state");
+  REQUIRE(run_ssrfleet("simulate --trucks 6 --seed 5 --quiet --out " + q(log), dir).status == 0);
+  const pid_t first = spawn_ssrfleet({"stream", "--state", state, "--input", log, "--follow", "--particles", "64",
+                                      "--seed", "3", "--quiet"});
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (trucks_in(state) < 6 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  REQUIRE(trucks_in(state) == 6);
+  const std::string before = test::read_text(state + "/posterior.json");
+  const auto second = run_ssrfleet("stream --state " + q(state) + " --input " + q(log) + " --particles 64 --seed 3", dir);
+  CHECK(second.status == 75);
+  CHECK(second.err.find("is in use by another stream (process " + std::to_string(first) + ")") != std::string::npos);
+  CHECK(test::read_text(state + "/posterior.json") == before);  // the second wrote nothing
+  // The first is still running and stops cleanly.
+  CHECK(kill(first, 0) == 0);
+  kill(first, SIGTERM);
+  CHECK(wait_for(first) == 0);
+  // Killed with SIGKILL while holding the lock, a stream leaves a state that resumes at once:
+  // the kernel dropped its lock.
+  const pid_t killed = spawn_ssrfleet({"stream", "--state", state, "--input", log, "--follow", "--particles", "64",
+                                       "--seed", "3", "--quiet"});
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  kill(killed, SIGKILL);
+  CHECK(wait_for(killed) == -SIGKILL);
+  const auto resumed = run_ssrfleet("stream --state " + q(state) + " --input " + q(log) + " --particles 64 --seed 3", dir);
+  INFO(resumed.err);
+  CHECK(resumed.status == 0);
+  CHECK(resumed.err.find("6 trucks in the posterior") != std::string::npos);
+}

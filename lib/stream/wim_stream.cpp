@@ -38,6 +38,8 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   if (ec || !fs::is_directory(options_.state_dir)) {
     throw IoError("stream: cannot create the state directory '" + options_.state_dir + "': " + ec.message());
   }
+  // One writer per state: taken before anything in the directory is read or written.
+  lock_ = std::make_unique<StateLock>(options_.state_dir);
   const std::string checkpoint = path_in(options_.state_dir, "checkpoint.bin");
   if (!fs::exists(checkpoint)) return;
   std::ifstream in(checkpoint, std::ios::binary);

@@ -13,6 +13,8 @@
 //   posterior.json   the posterior file `predict --posterior DIR` reads; rewritten atomically
 //   rejects.csv      every rejected record verbatim, each after a '# line N: reason' comment, under
 //                    a copy of the input's header, so it is itself a WIM log to fix and replay
+//   lock             flock(2)ed by the running stream, holding its process id (state_lock.hpp):
+//                    a second stream on the same state exits at once with status 75
 //
 // Resuming: with checkpoint.bin present, the stream restores it, cuts rejects.csv back to what it
 // held at that checkpoint, skips the input's lines up to the checkpoint (same input) and any
@@ -31,6 +33,7 @@
 #include "fleet/online_fit.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/site.hpp"
+#include "stream/state_lock.hpp"
 
 namespace ssrfleet::stream {
 
@@ -68,6 +71,7 @@ class WimStream {
   StreamCounts run(std::istream& in, const std::string& source, const std::atomic<bool>& stop);
 
  private:
+  std::unique_ptr<StateLock> lock_;  // held for the stream's life (state_lock.hpp)
   // The model's spec as the state records it: "base" or the extension's name.
   std::string model_text() const {
     return options_.fit.latent.extension != nullptr ? options_.fit.latent.extension->name() : "base";

@@ -1,5 +1,6 @@
 // The error vocabulary of ssrfleet. The library throws these; only bin/main.cpp turns them into
-// messages and exit codes (sysexits spirit: 64 usage, 65 data, 66 no input, 70 internal, 74 I/O).
+// messages and exit codes (sysexits spirit: 64 usage, 65 data, 66 no input, 70 internal, 74 I/O,
+// 75 busy: try again later).
 #pragma once
 
 #include <cstddef>
@@ -52,6 +53,13 @@ class MissingInputError : public std::runtime_error {
 
 // Writing an output failed (exit 74).
 class IoError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A resource another process holds, e.g. a stream state directory locked by a running stream
+// (exit 75, EX_TEMPFAIL: the same command may succeed once the holder is done).
+class BusyError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
