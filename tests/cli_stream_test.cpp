@@ -360,3 +360,50 @@ TEST_CASE("a second stream on a live state exits at once with status 75 and the 
   CHECK(resumed.status == 0);
   CHECK(resumed.err.find("6 trucks in the posterior") != std::string::npos);
 }
+
+TEST_CASE("a truncated or damaged state file is refused by name and never gives a posterior", "[cli][stream]") {
+  test::TempDir dir;
+  const std::string log = dir.file("log.csv"), state = dir.file("state");
+  REQUIRE(run_ssrfleet("simulate --trucks 4 --seed 5 --quiet --out " + q(log), dir).status == 0);
+  REQUIRE(run_ssrfleet("stream --state " + q(state) + " --input " + q(log) + " --particles 32 --seed 3 --quiet", dir).status == 0);
+  const std::string posterior = test::read_text(state + "/posterior.json");
+  for (const char* name : {"checkpoint.bin", "trucks.bin"}) {
+    const std::string path = state + "/" + name;
+    const std::string good = test::read_text(path);
+    REQUIRE(good.size() > 2048);
+    const auto resume = [&] {
+      return run_ssrfleet("stream --state " + q(state) + " --input " + q(log) + " --particles 32 --seed 3 --quiet", dir);
+    };
+    const auto write = [&](const std::string& bytes) {
+      std::ofstream out(path, std::ios::binary | std::ios::trunc);
+      out << bytes;
+    };
+    // Cut at every 1 KiB offset: a clear error naming the file (the truck log's tail beyond the
+    // checkpoint's count is cut off by design, so only cuts inside what the checkpoint counts
+    // matter there: all of them, since the checkpoint counts every record).
+    int refused = 0, cuts = 0;
+    for (std::size_t at = 0; at < good.size(); at += 1024) {
+      ++cuts;
+      write(good.substr(0, at));
+      const auto r = resume();
+      INFO(name << " cut at " << at << ": " << r.err);
+      CHECK(r.status == 65);
+      CHECK(r.err.find(name) != std::string::npos);
+      refused += r.status == 65;
+      CHECK(test::read_text(state + "/posterior.json") == posterior);  // nothing overwritten
+    }
+    CHECK(refused == cuts);
+    // One flipped byte in the middle (a value, not a length): the checksum names it.
+    std::string damaged = good;
+    damaged[damaged.size() / 2] = static_cast<char>(damaged[damaged.size() / 2] ^ 0x10);
+    write(damaged);
+    const auto r = resume();
+    INFO(r.err);
+    CHECK(r.status == 65);
+    CHECK(r.err.find(name) != std::string::npos);
+    CHECK(test::read_text(state + "/posterior.json") == posterior);
+    write(good);
+  }
+  // Restored, the state resumes.
+  CHECK(run_ssrfleet("stream --state " + q(state) + " --input " + q(log) + " --particles 32 --seed 3 --quiet", dir).status == 0);
+}

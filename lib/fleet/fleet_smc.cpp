@@ -79,8 +79,8 @@ void FleetSmc::rejuvenate(int sweeps) {
 }
 
 namespace {
-// checkpoint_header.hpp. 1: the latent core before the tyre-stiffness interweave; 2: the marginal
-// core (marginal_smc.cpp); 3: the latent core with the interweave's adapted scale.
+// checkpoint_header.hpp. 1: the latent core before the tyre-stiffness interweave; 2 and 4: the
+// marginal core (marginal_smc.cpp); 3: the latent core with the interweave's adapted scale.
 constexpr std::uint32_t kCheckpointVersion = 3;
 }  // namespace
 
@@ -101,7 +101,10 @@ void FleetSmc::restore(BinaryReader& in) {
       return "checkpoint format version 1 was written by an older latent core (before the tyre-stiffness "
              "interweave); this build's latent core reads version 3: replay the log into a new state directory";
     }
-    if (v == 2) return "checkpoint format version 2 is the marginal core's, not the latent core's (3): resume it without --window";
+    if (v == 2 || v == 4) {
+      return "checkpoint format version " + std::to_string(v) +
+             " is the marginal core's, not the latent core's (3): resume it without --window";
+    }
     return "unsupported checkpoint format version " + std::to_string(v);
   });
   smc::TemperedSampler::State state;

@@ -56,9 +56,9 @@ PosteriorCloud MarginalSmc::cloud() const {
 }
 
 namespace {
-// Version 1 was the latent-variable core (FleetSmc) of 0.1; version 2 is this one; 3 the latent core
-// now (checkpoint_header.hpp).
-constexpr std::uint32_t kCheckpointVersion = 2;
+// Version 1 was the latent-variable core (FleetSmc) of 0.1; version 2 this one without checksums;
+// 3 the latent core now; 4 this one with a checksum after each truck record (checkpoint_header.hpp).
+constexpr std::uint32_t kCheckpointVersion = 4;
 }  // namespace
 
 void MarginalSmc::save(BinaryWriter& out) const {
@@ -82,6 +82,7 @@ void MarginalSmc::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t 
   for (std::size_t i = begin; i < end; ++i) {
     out.text(truck_ids_[i]);
     target_.save_trucks(out, i, i + 1);
+    out.seal();  // each record checked on its own: the truck log is appended to
   }
 }
 
@@ -89,10 +90,11 @@ void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {
   read_checkpoint_header(in, kCheckpointVersion, site_, sampler_.options().seed, [](std::uint32_t v) -> std::string {
     if (v == 1) {
       return "checkpoint format version 1 was written by the latent-variable core of ssrfleet 0.1; this build's "
-             "default core reads version 2: replay the log into a new state directory (or resume it with --window, "
+             "default core reads version 4: replay the log into a new state directory (or resume it with --window, "
              "which keeps the latent core)";
     }
-    if (v == 3) return "checkpoint format version 3 is the latent core's (--window), not the marginal core's (2)";
+    if (v == 2) return "checkpoint format version 2 (before checksums): replay the log into a new state directory";
+    if (v == 3) return "checkpoint format version 3 is the latent core's (--window), not the marginal core's (4)";
     return "unsupported checkpoint format version " + std::to_string(v);
   });
   smc::TemperedSampler::State state;
@@ -105,6 +107,7 @@ void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {
   for (std::uint64_t i = 0; i < n; ++i) {
     truck_ids_.push_back(trucks.text("truck_id"));
     target_.load_trucks(trucks, 1);
+    trucks.check_seal("truck record");
   }
   sampler_.restore(state);
 }

@@ -22,8 +22,9 @@ namespace fs = std::filesystem;
 namespace {
 std::string path_in(const std::string& dir, const char* name) { return (fs::path(dir) / name).string(); }
 // The stream checkpoint's header (bookkeeping first, then the core's state, with the marginal
-// core's truck log beside it). Version 3 records the model after the source; version 2, the same
-// without it, is read as the base model's; version 1 began with the core's own magic word.
+// core's truck log beside it), sealed with a checksum (binary_io.hpp). Version 3 records the model
+// after the source and carries the checksums; version 2 had neither; version 1 began with the
+// core's own magic word.
 constexpr std::uint64_t kStreamMagic = 0x4d52545346525353ULL;       // "SSRFSTRM"
 constexpr std::uint32_t kStreamVersion = 3;
 constexpr std::uint64_t kOldCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
@@ -52,12 +53,13 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   }
   if (magic != kStreamMagic) reader.fail("magic", "not an ssrfleet stream checkpoint");
   const auto version = reader.value<std::uint32_t>("version");
-  if (version != kStreamVersion && version != 2) {
-    reader.fail("version", "stream state format version " + std::to_string(version) + ", this build reads 2 and " +
-                               std::to_string(kStreamVersion));
+  if (version != kStreamVersion) {
+    reader.fail("version", "stream state format version " + std::to_string(version) + (version == 2 ? " (before checksums and models)" : "") +
+                               ", this build reads " + std::to_string(kStreamVersion) +
+                               ": replay the log into a new state directory");
   }
   checkpoint_source_ = reader.text("source");
-  const std::string state_model = version >= 3 ? reader.text("model") : "base";
+  const std::string state_model = reader.text("model");
   if (state_model != model_text()) {
     reader.fail("model", "the state was written with --model " + state_model + "; resume it with the same model (this "
                          "run asks for " + model_text() + ")");
@@ -84,11 +86,13 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
     if (!trucks_in) throw IoError("stream: cannot read '" + log + "'");
     BinaryReader trucks(trucks_in, log);
     smc_->restore_split(reader, trucks);
+    reader.check_seal("checkpoint");
     if (static_cast<std::uint64_t>(smc_->trucks_seen()) != trucks_written_) {
       reader.fail("trucks_written", "the checkpoint and the truck log disagree on the truck count");
     }
   } else {
     smc_->restore(reader);
+    reader.check_seal("checkpoint");
   }
   resumed_ = true;
   // Records rejected after the checkpoint will be read and rejected again: cut them off here so
@@ -132,6 +136,7 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
     out.value<std::uint64_t>(trucks_bytes_);
     out.value<std::int32_t>(trucks_generation_);
     smc_->save_state(out);
+    out.seal();
   });
   const fleet::PosteriorCloud cloud = smc_->cloud();
   io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), cloud, fleet::summarise_cloud(cloud),
