@@ -2,9 +2,12 @@
 // predictive checks, shortlist the catalogue's extensions whose signature matches the failed
 // checks, refit with each by the same SMC, choose by log-evidence (the Bayes factor against the
 // base model) confirmed by held-out predictive skill, and measure the gap again with the chosen
-// effect in the model. "none" is an answer: when no candidate is decisively better on both
-// counts. Among the supported candidates, those within the threshold of the largest log Bayes
-// factor are not told apart by evidence, and the best held-out skill among them is chosen.
+// effect in the model. Among the supported candidates, those within the threshold of the largest
+// log Bayes factor are not told apart by evidence, and the best held-out skill among them is chosen.
+// While a check still fails, the search goes on from the model so far (a composed model,
+// model_spec.hpp), one effect a round, up to max_effects. The verdict: "none" (no check fails, no
+// effect supported), "explained" (effects named, no check fails with them) or "unexplained" (a
+// check still fails, with the failed checks and where they point in the description).
 //
 // By default every extension is refitted, the shortlisted ones first: the checks look at
 // residuals after each truck's own (k, k_t, z) have been fitted, and those latents absorb much

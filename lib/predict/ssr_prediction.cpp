@@ -1,5 +1,6 @@
 #include "predict/ssr_prediction.hpp"
 
+#include <memory>
 #include <string>
 
 #include <boost/random/mersenne_twister.hpp>
