@@ -4,6 +4,8 @@
 // with the file and the line or byte offset.
 #include <catch2/catch.hpp>
 
+#include "test_support.hpp"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -58,14 +60,7 @@ const std::string kLrfi = header(
                           " 0.0100000 0.0005000 0.0004000-0.0002500\n"
                           " 0.0200000 1.250D-03 0.0000000 0.0000000\n";
 
-std::optional<DataError> data_error(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const DataError& e) {
-    return e;
-  }
-  return std::nullopt;
-}
+using test::data_error;
 
 void append_big_endian_float(std::string& out, float v) {
   const auto u = std::bit_cast<std::uint32_t>(v);

@@ -3,6 +3,8 @@
 // refused with the file, the line and the field.
 #include <catch2/catch.hpp>
 
+#include "test_support.hpp"
+
 #include <functional>
 #include <optional>
 #include <sstream>
@@ -34,14 +36,7 @@ const std::string kErd =
     " 4.0\n"
     " 5.0 6.0\n";
 
-std::optional<DataError> data_error(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const DataError& e) {
-    return e;
-  }
-  return std::nullopt;
-}
+using test::data_error;
 
 std::string replaced(std::string text, const std::string& from, const std::string& to) {
   text.replace(text.find(from), from.size(), to);

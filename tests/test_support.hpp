@@ -3,8 +3,11 @@
 #pragma once
 
 #include "model/fleet_distribution.hpp"
+#include "util/errors.hpp"
 
 #include <cstdlib>
+#include <functional>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -75,6 +78,16 @@ inline RunResult run_ssrfleet(const std::string& args, const TempDir& dir) {
   r.out = read_text(out);
   r.err = read_text(err);
   return r;
+}
+
+// The DataError f throws, if it throws one (so a test can check its file, line and field).
+inline std::optional<DataError> data_error(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const DataError& e) {
+    return e;
+  }
+  return std::nullopt;
 }
 
 }  // namespace ssrfleet::test

@@ -37,4 +37,15 @@ std::string crg_format_name(CrgDataFormat f);  // "LRFI", ...
 // "LRFI", "LDFI", "KRBI", "KDBI" (any case); false for anything else.
 bool parse_crg_format(std::string_view name, CrgDataFormat& f);
 
+// The next line of `bytes` from `pos` (advanced past its '\n'), without a trailing '\r': the header
+// and the text payload read lines the same way.
+inline std::string_view next_crg_line(std::string_view bytes, std::size_t& pos) {
+  const std::size_t lf = bytes.find('\n', pos);
+  const std::size_t stop = lf == std::string_view::npos ? bytes.size() : lf;
+  std::string_view line = bytes.substr(pos, stop - pos);
+  pos = lf == std::string_view::npos ? bytes.size() : lf + 1;
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  return line;
+}
+
 }  // namespace ssrfleet::road

@@ -117,12 +117,8 @@ CrgHeader parse_crg_header(std::string_view bytes, const std::string& source) {
   std::set<std::string> skipped_noted;
   std::size_t pos = 0, number = 0;
   while (pos < bytes.size()) {
-    const std::size_t lf = bytes.find('\n', pos);
-    const std::size_t stop = lf == std::string_view::npos ? bytes.size() : lf;
-    std::string_view line = bytes.substr(pos, stop - pos);
-    pos = lf == std::string_view::npos ? bytes.size() : lf + 1;
+    std::string_view line = next_crg_line(bytes, pos);
     ++number;
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     line = line.substr(0, crg_header_line_chars);
 
     if (starts_with(line, "$$")) {

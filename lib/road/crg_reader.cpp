@@ -313,12 +313,8 @@ void decode_text(std::string_view bytes, const CrgHeader& h, std::size_t declare
   std::vector<Span> lines;
   std::size_t pos = h.payload_offset, number = h.end_line;
   while (pos < bytes.size()) {
-    const std::size_t lf = bytes.find('\n', pos);
-    const std::size_t stop = lf == std::string_view::npos ? bytes.size() : lf;
-    std::string_view line = bytes.substr(pos, stop - pos);
-    pos = lf == std::string_view::npos ? bytes.size() : lf + 1;
+    std::string_view line = next_crg_line(bytes, pos);
     ++number;
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (trim_blanks(line).empty()) continue;
     lines.push_back({line, number});
   }
