@@ -6,6 +6,7 @@
 #include <fcntl.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -211,6 +212,42 @@ TEST_CASE("predict reading the state of a running stream always gets a valid pos
   CHECK(reads > 10);
   CHECK(bad_reads == 0);
   CHECK(last == 40);
+}
+
+TEST_CASE("the sqlite3 shell reading a running stream's history always sees whole row sets", "[cli][stream][history]") {
+  test::TempDir dir;
+  const std::string log = dir.file("log.csv");
+  REQUIRE(run_ssrfleet("simulate --trucks 30 --seed 3 --quiet --out " + q(log), dir).status == 0);
+  const std::string state = dir.file("state"), out = dir.file("query.txt");
+  const pid_t pid = spawn_ssrfleet(stream_args(state, log));
+  // Reports, their last seq, and prediction rows: a row set is all there or not at all.
+  // A reader waits out the writer's brief locks (SQLite's busy timeout), as the README says to.
+  const std::string query = "sqlite3 -cmd '.timeout 5000' " + q(state + "/history.sqlite") +
+                            " 'SELECT count(*), coalesce(max(seq), 0), (SELECT count(*) FROM predictions), "
+                            "(SELECT count(*) FROM hyperparameters) FROM reports;' > " + q(out) + " 2>&1";
+  int reads = 0;
+  long last = 0;
+  bool running = true;
+  while (running) {
+    running = waitpid(pid, nullptr, WNOHANG) == 0;
+    if (!std::filesystem::exists(state + "/history.sqlite")) continue;
+    const int rc = std::system(query.c_str());
+    const std::string text = test::read_text(out);
+    long reports = -1, seq = -1, predictions = -1, hyper = -1;
+    const bool parsed = std::sscanf(text.c_str(), "%ld|%ld|%ld|%ld", &reports, &seq, &predictions, &hyper) == 4;
+    INFO("query output: " << text);
+    REQUIRE(rc == 0);
+    REQUIRE(parsed);
+    CHECK(reports == seq);  // 1, 2, ..., seq: none missing
+    CHECK(predictions == 16 * reports);
+    CHECK(hyper == 7 * reports);
+    CHECK(seq >= last);
+    last = seq;
+    ++reads;
+  }
+  INFO(reads << " reads while the stream ran");
+  CHECK(reads > 5);
+  CHECK(last == 30);
 }
 
 TEST_CASE("a following stream picks up records appended to its input and stops cleanly on SIGTERM",

@@ -3,18 +3,32 @@
 // always holds a consistent posterior and a checkpoint to resume from.
 //
 // State directory:
-//   checkpoint.bin   the stream's bookkeeping, then the core's state; rewritten atomically after
-//                    every absorbed truck. Its size does not grow with the trucks absorbed on the
-//                    default (marginal) core: their records are in trucks.bin
-//   trucks.bin       the marginal core's truck records (id, data, fit, table), appended and synced
-//                    before the checkpoint that counts them; rewritten whole after a table rebuild
-//                    (a few times per doubling of the early stream, none later). A crash between
-//                    the append and the checkpoint leaves a tail that the resume cuts off
-//   posterior.json   the posterior file `predict --posterior DIR` reads; rewritten atomically
+//   checkpoint.bin   the stream's bookkeeping (with the checkpoint's sequence number), then the
+//                    core's state; rewritten atomically after every absorbed truck. Its size does
+//                    not grow with the trucks absorbed on the default (marginal) core: their
+//                    records are in trucks.bin
+//   trucks.bin       the marginal core's truck records (id, data, fit, table) after a header naming
+//                    the tables' generation; appended and synced before the checkpoint that counts
+//                    them. A crash between the append and the checkpoint leaves a tail that the
+//                    resume cuts off. After a table rebuild (a few times per doubling of the early
+//                    stream, none later) the whole log is written to trucks.bin.next, the
+//                    checkpoint naming the new generation follows, and only then does the rename
+//                    replace trucks.bin, so the log on disk always matches the checkpoint (a resume
+//                    finishes or discards a rename that a crash or a full disk interrupted)
+//   history.sqlite   every checkpoint's report (hyperparameter summaries, an SSR prediction), in
+//                    SQLite (io/history_db.hpp), written after the checkpoint's rename and naming its
+//                    sequence number and checksum; a resume adds the one row set a failure between
+//                    the two can leave missing, and refuses a history that disagrees
+//   posterior.json   the posterior file `predict --posterior DIR` reads; rewritten atomically after
+//                    every checkpoint and on resume
 //   rejects.csv      every rejected record verbatim, each after a '# line N: reason' comment, under
 //                    a copy of the input's header, so it is itself a WIM log to fix and replay
 //   lock             flock(2)ed by the running stream, holding its process id (state_lock.hpp):
 //                    a second stream on the same state exits at once with status 75
+//
+// A write that fails (a full disk, a read-only directory) is an IoError that ends the run; every
+// file above is then as the last good checkpoint left it, or ahead of it in a way the resume
+// repairs, so the stream resumes exactly once the disk is writable again.
 //
 // Resuming: with checkpoint.bin present, the stream restores it, cuts rejects.csv back to what it
 // held at that checkpoint, skips the input's lines up to the checkpoint (same input) and any
@@ -33,7 +47,9 @@
 #include "fleet/online_fit.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/site.hpp"
+#include "io/history_db.hpp"
 #include "stream/state_lock.hpp"
+#include "util/binary_io.hpp"
 
 namespace ssrfleet::stream {
 
@@ -46,6 +62,9 @@ struct StreamOptions {
   // effects (model_spec.hpp; on the latent core), recorded in the state by name.
   fleet::OnlineFitOptions fit;
   predict::PredictionOptions prediction;
+  // The prediction each checkpoint's history row set holds: lighter than a report's, since it runs
+  // after every truck (about 2,000 passes; history_rows.hpp).
+  predict::PredictionOptions history_prediction{.theta_draws = 50, .trucks_per_draw = 40};
 };
 
 struct StreamCounts {
@@ -76,7 +95,11 @@ class WimStream {
   std::string model_text() const {
     return options_.fit.latent.extension != nullptr ? options_.fit.latent.extension->name() : "base";
   }
+  void restore_checkpoint(const std::string& checkpoint);
+  void restore_truck_log(BinaryReader& checkpoint);
+  void open_history();
   void save_state(const std::string& source, std::size_t lines_consumed);
+  void write_history_and_posterior(const std::string& source, std::size_t lines_consumed);
   void report() const;
 
   const site::Site& site_;
@@ -89,6 +112,9 @@ class WimStream {
   std::string checkpoint_source_;
   std::size_t checkpoint_lines_ = 0;
   std::uint64_t rejects_bytes_ = 0;
+  std::uint64_t seq_ = 0;                  // checkpoints written into this state, over all runs
+  std::uint64_t checkpoint_checksum_ = 0;  // the seal of checkpoint number seq_
+  std::unique_ptr<io::HistoryDb> history_;
   // The truck log (marginal core): records written, its length, and the table generation they hold.
   std::uint64_t trucks_written_ = 0;
   std::uint64_t trucks_bytes_ = 0;

@@ -51,10 +51,12 @@ class BinaryWriter {
   }
   // Appends the hash of everything written since the last seal, and starts a new one.
   void seal() {
-    const std::uint64_t h = hash_;
-    out_.write(reinterpret_cast<const char*>(&h), sizeof h);
+    last_seal_ = hash_;
+    out_.write(reinterpret_cast<const char*>(&last_seal_), sizeof last_seal_);
     hash_ = detail::kFnvOffset;
   }
+  // The checksum the last seal() wrote (a record elsewhere may name the file by it).
+  std::uint64_t last_seal() const { return last_seal_; }
 
  private:
   void put(const char* bytes, std::size_t n) {
@@ -63,6 +65,7 @@ class BinaryWriter {
   }
   std::ostream& out_;
   std::uint64_t hash_ = detail::kFnvOffset;
+  std::uint64_t last_seal_ = 0;
 };
 
 class BinaryReader {
@@ -100,7 +103,10 @@ class BinaryReader {
     if (!in_) fail(what, "file ends early (no checksum)");
     if (sealed != expected) fail(what, "checksum mismatch: the file was changed or damaged after it was written");
     hash_ = detail::kFnvOffset;
+    last_seal_ = sealed;
   }
+  // The checksum the last check_seal() verified.
+  std::uint64_t last_seal() const { return last_seal_; }
   [[noreturn]] void fail(const char* what, const std::string& why) const { throw DataError(source_, 0, what, why); }
 
  private:
@@ -112,6 +118,7 @@ class BinaryReader {
   std::istream& in_;
   std::string source_;
   std::uint64_t hash_ = detail::kFnvOffset;
+  std::uint64_t last_seal_ = 0;
 };
 
 }  // namespace ssrfleet
