@@ -66,15 +66,15 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   lock_ = std::make_unique<StateLock>(options_.state_dir);
   const std::string checkpoint = path_in(options_.state_dir, "checkpoint.bin");
   if (fs::exists(checkpoint)) restore_checkpoint(checkpoint);
-  open_history();
-  if (resumed_) {
-    // posterior.json may lag the checkpoint if the last run failed after the rename.
+  const bool caught_up = open_history();
+  if (resumed_ && !caught_up) {
+    // posterior.json may lag the checkpoint if the last run failed after the history's commit.
     const fleet::PosteriorCloud cloud = smc_->cloud();
     io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), cloud, fleet::summarise_cloud(cloud),
                              fleet::summarise_psi(cloud));
-    if (progress_) {
-      *progress_ << "stream: resumed from " << checkpoint << " with " << smc_->trucks_seen() << " trucks absorbed\n";
-    }
+  }
+  if (resumed_ && progress_) {
+    *progress_ << "stream: resumed from " << checkpoint << " with " << smc_->trucks_seen() << " trucks absorbed\n";
   }
 }
 
@@ -160,8 +160,8 @@ void WimStream::restore_truck_log(BinaryReader& checkpoint) {
 
 // The history must end at this checkpoint, or one short of it (a failure between the checkpoint's
 // rename and the history's commit): then the missing row set is written now, from the restored
-// cloud, exactly as the interrupted run would have written it.
-void WimStream::open_history() {
+// cloud, exactly as the interrupted run would have written it (and posterior.json with it: true).
+bool WimStream::open_history() {
   history_ = std::make_unique<io::HistoryDb>(path_in(options_.state_dir, "history.sqlite"), model_text());
   const std::optional<std::uint64_t> last = history_->last_seq();
   const std::uint64_t have = last.value_or(0);
@@ -171,12 +171,12 @@ void WimStream::open_history() {
                       "report " + std::to_string(seq_) + " names another checkpoint.bin than the one in the state "
                       "directory: history and checkpoint disagree");
     }
-    return;
+    return false;
   }
   if (have + 1 == seq_) {
     if (have > 0) history_->read_report(have);  // its checksum, before building on it
     write_history_and_posterior(checkpoint_source_, checkpoint_lines_);
-    return;
+    return true;
   }
   throw DataError(history_->path(), 0, "seq",
                   "the history ends at report " + std::to_string(have) + " but the checkpoint is number " +

@@ -97,7 +97,7 @@ class WimStream {
   }
   void restore_checkpoint(const std::string& checkpoint);
   void restore_truck_log(BinaryReader& checkpoint);
-  void open_history();
+  bool open_history();
   void save_state(const std::string& source, std::size_t lines_consumed);
   void write_history_and_posterior(const std::string& source, std::size_t lines_consumed);
   void report() const;
