@@ -64,7 +64,7 @@ std::string_view trim_blanks(std::string_view s) {
 
 bool parse_real(std::string_view text, double& value) {
   if (text.empty() || text.size() > 64) return false;
-  char buffer[65] = {};  // (zeroed only to quiet a false maybe-uninitialized under sanitizers)
+  char buffer[65];
   std::size_t n = 0;
   for (const char c : text) buffer[n++] = (c == 'D' || c == 'd') ? 'e' : c;
   const char* begin = buffer;
