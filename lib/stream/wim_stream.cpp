@@ -26,12 +26,17 @@ std::string path_in(const std::string& dir, const char* name) { return (fs::path
 // after the source and carries the checksums; version 2 had neither; version 1 began with the
 // core's own magic word.
 constexpr std::uint64_t kStreamMagic = 0x4d52545346525353ULL;       // "SSRFSTRM"
-constexpr std::uint32_t kStreamVersion = 3;
+constexpr std::uint32_t kStreamVersion = 4;
 constexpr std::uint64_t kOldCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
 }  // namespace
 
 WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream* progress, std::ostream& reports)
-    : site_(site), options_(std::move(options)), progress_(progress), reports_(reports), smc_(fleet::make_online_fit(site, options_.fit)) {
+    : site_(site),
+      options_(std::move(options)),
+      progress_(progress),
+      reports_(reports),
+      cores_(site, options_.fit, options_.state_dir) {
+  fleet::make_online_fit(site, options_.fit);  // UsageError now on bad options, as before classes
   if (options_.state_dir.empty()) throw UsageError("stream: a state directory is required (--state DIR)");
   if (options_.report_every < 0) throw UsageError("stream: --report-every must be >= 0");
   std::error_code ec;
@@ -54,7 +59,8 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   if (magic != kStreamMagic) reader.fail("magic", "not an ssrfleet stream checkpoint");
   const auto version = reader.value<std::uint32_t>("version");
   if (version != kStreamVersion) {
-    reader.fail("version", "stream state format version " + std::to_string(version) + (version == 2 ? " (before checksums and models)" : "") +
+    reader.fail("version", "stream state format version " + std::to_string(version) +
+                               (version == 2 ? " (before checksums and models)" : version == 3 ? " (before vehicle classes)" : "") +
                                ", this build reads " + std::to_string(kStreamVersion) +
                                ": replay the log into a new state directory");
   }
@@ -67,32 +73,14 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   checkpoint_lines_ = reader.value<std::uint64_t>("lines_consumed");
   rejects_bytes_ = reader.value<std::uint64_t>("rejects_bytes");
   const bool split = reader.value<std::uint8_t>("split") != 0;
-  trucks_written_ = reader.value<std::uint64_t>("trucks_written");
-  trucks_bytes_ = reader.value<std::uint64_t>("trucks_bytes");
-  trucks_generation_ = reader.value<std::int32_t>("trucks_generation");
-  if (split != smc_->splits_state()) {
-    reader.fail("core", std::string("the state was written by the ") + (split ? "marginal" : "latent") +
-                            " core; resume it with the same core (--window selects the latent one)");
-  }
-  if (split) {
-    // A crash between appending to the truck log and this checkpoint leaves a tail: cut it off.
-    const std::string log = path_in(options_.state_dir, "trucks.bin");
-    if (!fs::exists(log) || fs::file_size(log) < trucks_bytes_) {
-      reader.fail("trucks_bytes", "'" + log + "' is missing or shorter than the checkpoint says (" +
-                                      std::to_string(trucks_bytes_) + " bytes)");
-    }
-    if (fs::file_size(log) > trucks_bytes_) fs::resize_file(log, trucks_bytes_);
-    std::ifstream trucks_in(log, std::ios::binary);
-    if (!trucks_in) throw IoError("stream: cannot read '" + log + "'");
-    BinaryReader trucks(trucks_in, log);
-    smc_->restore_split(reader, trucks);
-    reader.check_seal("checkpoint");
-    if (static_cast<std::uint64_t>(smc_->trucks_seen()) != trucks_written_) {
-      reader.fail("trucks_written", "the checkpoint and the truck log disagree on the truck count");
-    }
-  } else {
-    smc_->restore(reader);
-    reader.check_seal("checkpoint");
+  cores_.restore(reader, split);
+  reader.check_seal("checkpoint");
+  if (!options_.classes.empty() && options_.classes != cores_.fixed()) {
+    std::string fixed;
+    for (const auto& c : cores_.fixed()) fixed += (fixed.empty() ? "" : ",") + c;
+    throw UsageError("stream: the state in '" + options_.state_dir + "' was made with " +
+                     (fixed.empty() ? std::string("no fixed classes") : "--classes " + fixed) +
+                     "; a resume keeps its classes (leave --classes out or give the same list)");
   }
   resumed_ = true;
   // Records rejected after the checkpoint will be read and rejected again: cut them off here so
@@ -100,29 +88,14 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   const std::string rejects = path_in(options_.state_dir, "rejects.csv");
   if (fs::exists(rejects) && fs::file_size(rejects) > rejects_bytes_) fs::resize_file(rejects, rejects_bytes_);
   if (progress_) {
-    *progress_ << "stream: resumed from " << checkpoint << " with " << smc_->trucks_seen() << " trucks absorbed\n";
+    *progress_ << "stream: resumed from " << checkpoint << " with " << cores_.trucks_seen() << " trucks absorbed"
+               << (cores_.labelled() ? " in classes " + cores_.labels() : std::string()) << "\n";
   }
 }
 
 void WimStream::save_state(const std::string& source, std::size_t lines_consumed) {
-  if (smc_->splits_state()) {
-    const std::string log = path_in(options_.state_dir, "trucks.bin");
-    const auto n = static_cast<std::uint64_t>(smc_->trucks_seen());
-    if (smc_->table_generation() != trucks_generation_ || trucks_written_ > n) {
-      io::write_file_atomically(log, [&](std::ostream& os) {
-        BinaryWriter out(os);
-        smc_->save_trucks(out, 0, n);
-      });
-      trucks_generation_ = smc_->table_generation();
-    } else if (n > trucks_written_) {
-      std::ostringstream records;
-      BinaryWriter out(records);
-      smc_->save_trucks(out, trucks_written_, n);
-      io::append_file_synced(log, records.str());
-    }
-    trucks_written_ = n;
-    trucks_bytes_ = fs::file_size(log);
-  }
+  // The checkpoint: the stream's bookkeeping, then every class's core (class_cores.hpp, which
+  // first brings each class's truck log up to date).
   io::write_file_atomically(path_in(options_.state_dir, "checkpoint.bin"), [&](std::ostream& os) {
     BinaryWriter out(os);
     out.value(kStreamMagic);
@@ -131,36 +104,56 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
     out.text(model_text());
     out.value<std::uint64_t>(lines_consumed);
     out.value<std::uint64_t>(rejects_bytes_);
-    out.value<std::uint8_t>(smc_->splits_state() ? 1 : 0);
-    out.value<std::uint64_t>(trucks_written_);
-    out.value<std::uint64_t>(trucks_bytes_);
-    out.value<std::int32_t>(trucks_generation_);
-    smc_->save_state(out);
+    out.value<std::uint8_t>(cores_.splits_state() ? 1 : 0);
+    cores_.save(out);
     out.seal();
   });
-  const fleet::PosteriorCloud cloud = smc_->cloud();
-  io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), cloud, fleet::summarise_cloud(cloud),
-                           fleet::summarise_psi(cloud));
+  const fleet::ClassPosteriors classes = cores_.posteriors();
+  std::vector<std::vector<fleet::ParameterSummary>> hyper, psi;
+  for (const auto& c : classes) {
+    hyper.push_back(fleet::summarise_cloud(c.cloud));
+    psi.push_back(fleet::summarise_psi(c.cloud));
+  }
+  io::write_posterior_classes_file(path_in(options_.state_dir, "posterior.json"), classes, hyper, psi);
 }
 
 void WimStream::report() const {
-  if (smc_->trucks_seen() == 0) return;
-  const auto prediction = predict::predict_ssr(smc_->cloud(), site_, {}, options_.prediction);
-  reports_ << "# SSR prediction after " << smc_->trucks_seen() << " trucks\n";
+  if (cores_.trucks_seen() == 0) return;
+  // With classes: the mixture at the observed traffic shares (predict_ssr_mixture; one
+  // unlabelled class is predict_ssr itself).
+  const fleet::ClassPosteriors classes = cores_.posteriors();
+  const auto prediction =
+      predict::predict_ssr_mixture(classes, fleet::observed_shares(classes), site_, {}, options_.prediction);
+  reports_ << "# SSR prediction after " << cores_.trucks_seen() << " trucks";
+  if (cores_.labelled()) reports_ << " (classes " << cores_.labels() << " at their observed shares)";
+  reports_ << "\n";
   predict::write_prediction_csv(reports_, prediction);
   reports_.flush();
 }
 
 StreamCounts WimStream::run(std::istream& in, const std::string& source, const std::atomic<bool>& stop) {
-  io::WimLogReader reader(in, source, site_.options().unsprung_mass_kg);
+  io::WimLogReader reader(in, source, site_.options().unsprung_mass_kg, options_.limits);
   if (reader.sensors() != site_.sensors()) {
     throw DataError(source, 1, "if_" + std::to_string(reader.sensors()),
                     "the input has " + std::to_string(reader.sensors()) + " sensors but the site has " +
                         std::to_string(site_.sensors()));
   }
+  // Vehicle classes: a state holds labelled classes or one unlabelled posterior, never both.
+  if (!cores_.empty() && cores_.labelled() != reader.has_classes()) {
+    throw DataError(source, 1, "class",
+                    cores_.labelled() ? "the input has no class column, but the state holds classes " + cores_.labels()
+                                      : std::string("the input has a class column, but the state's posterior has no "
+                                                    "classes (replay into a new state directory)"));
+  }
+  if (!resumed_) cores_.set_fixed(options_.classes);
+  if (!cores_.fixed().empty() && !reader.has_classes()) {
+    throw DataError(source, 1, "class", "the state's classes are fixed (--classes), but the input has no class column");
+  }
+  reader.set_classes(cores_.fixed());
   reader.set_follow(options_.follow);
   const bool same_source = resumed_ && source == checkpoint_source_;
-  const std::unordered_set<std::string> absorbed_before(smc_->truck_ids().begin(), smc_->truck_ids().end());
+  const std::vector<std::string> ids_before = cores_.truck_ids();
+  const std::unordered_set<std::string> absorbed_before(ids_before.begin(), ids_before.end());
 
   const std::string rejects_path = path_in(options_.state_dir, "rejects.csv");
   std::ofstream rejects(rejects_path, std::ios::app | std::ios::binary);
@@ -198,21 +191,23 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
       ++counts.skipped;
       continue;
     }
-    const auto& stage = smc_->absorb(record);
+    fleet::OnlineFit& core = cores_.core(record.vehicle_class);
+    const auto& stage = core.absorb(record);
     ++counts.absorbed;
     save_state(source, line);
     if (progress_) {
-      *progress_ << "stream: truck " << smc_->trucks_seen() << " " << record.truck_id << " (line " << line << "): "
-                 << stage.steps.size() << " steps, ESS " << std::fixed << std::setprecision(0) << smc_->sampler().ess()
+      *progress_ << "stream: truck " << cores_.trucks_seen() << " " << record.truck_id << " (line " << line << ")"
+                 << (record.vehicle_class.empty() ? "" : " class " + record.vehicle_class) << ": "
+                 << stage.steps.size() << " steps, ESS " << std::fixed << std::setprecision(0) << core.sampler().ess()
                  << ", " << std::setprecision(3) << stage.wall_time_s << " s";
-      const std::string note = smc_->note();
+      const std::string note = core.note();
       *progress_ << (note.empty() ? "" : "; ") << note << "\n";
       progress_->unsetf(std::ios::floatfield);
     }
-    if (options_.report_every > 0 && smc_->trucks_seen() % options_.report_every == 0) report();
+    if (options_.report_every > 0 && cores_.trucks_seen() % options_.report_every == 0) report();
   }
   report();
-  counts.total_absorbed = smc_->trucks_seen();
+  counts.total_absorbed = cores_.trucks_seen();
   return counts;
 }
 

@@ -9,8 +9,10 @@
 //   trucks.bin       the marginal core's truck records (id, data, fit, table), appended and synced
 //                    before the checkpoint that counts them; rewritten whole after a table rebuild
 //                    (a few times per doubling of the early stream, none later). A crash between
-//                    the append and the checkpoint leaves a tail that the resume cuts off
-//   posterior.json   the posterior file `predict --posterior DIR` reads; rewritten atomically
+//                    the append and the checkpoint leaves a tail that the resume cuts off. With
+//                    vehicle classes, one per class: trucks.LABEL.bin (stream/class_cores.hpp)
+//   posterior.json   the posterior file `predict --posterior DIR` reads (a posterior per class when
+//                    the input has a class column); rewritten atomically
 //   rejects.csv      every rejected record verbatim, each after a '# line N: reason' comment, under
 //                    a copy of the input's header, so it is itself a WIM log to fix and replay
 //   lock             flock(2)ed by the running stream, holding its process id (state_lock.hpp):
@@ -30,9 +32,13 @@
 
 #include <memory>
 
+#include <set>
+
 #include "fleet/online_fit.hpp"
+#include "io/wim_log.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/site.hpp"
+#include "stream/class_cores.hpp"
 #include "stream/state_lock.hpp"
 
 namespace ssrfleet::stream {
@@ -46,6 +52,11 @@ struct StreamOptions {
   // effects (model_spec.hpp; on the latent core), recorded in the state by name.
   fleet::OnlineFitOptions fit;
   predict::PredictionOptions prediction;
+  // Vehicle classes: when not empty, the only classes a new state accepts (a record of another is
+  // quarantined, field `class`); a resumed state keeps the list it was made with (another list is
+  // refused). Empty: a new label starts a new class. limits.fhwa_classes: labels must be 1..13.
+  std::set<std::string> classes;
+  io::WimLimits limits;
 };
 
 struct StreamCounts {
@@ -64,7 +75,7 @@ class WimStream {
 
   bool resumed() const { return resumed_; }
   // What the user should know about the posterior's quality (fleet::OnlineFit::warning), "" if nothing.
-  std::string warning() const { return smc_->warning(); }
+  std::string warning() const { return cores_.warning(); }
 
   // Reads records from `in` until its end (or, following, until `stop` is set). `source` names
   // the input in messages and in the checkpoint (a resume skips by line only on the same source).
@@ -83,16 +94,12 @@ class WimStream {
   StreamOptions options_;
   std::ostream* progress_;
   std::ostream& reports_;
-  std::unique_ptr<fleet::OnlineFit> smc_;
+  ClassCores cores_;  // a fleet posterior per vehicle class (one, unlabelled, without a class column)
   bool resumed_ = false;
   // Bookkeeping restored from the checkpoint.
   std::string checkpoint_source_;
   std::size_t checkpoint_lines_ = 0;
   std::uint64_t rejects_bytes_ = 0;
-  // The truck log (marginal core): records written, its length, and the table generation they hold.
-  std::uint64_t trucks_written_ = 0;
-  std::uint64_t trucks_bytes_ = 0;
-  int trucks_generation_ = -1;
 };
 
 }  // namespace ssrfleet::stream
