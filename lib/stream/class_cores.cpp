@@ -21,8 +21,9 @@ std::string ClassCores::truck_log(const std::string& label) const {
 ClassCores::Core& ClassCores::make(const std::string& label) {
   fleet::OnlineFitOptions o = options_;
   o.sampler().seed = fleet::class_seed(options_.sampler().seed, label);
+  auto fit = fleet::make_online_fit(site_, o);  // before the map holds an entry for it
   Core& c = cores_[label];
-  c.fit = fleet::make_online_fit(site_, o);
+  c.fit = std::move(fit);
   return c;
 }
 
