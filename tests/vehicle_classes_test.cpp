@@ -43,7 +43,8 @@ std::vector<std::string> class_column(const std::string& path) {
 // Two classes whose suspensions differ by far more than a 40-truck posterior's sd (about 6e3 N/m).
 const char* kTwoClasses = "A:share=0.5,k-mean=350e3,k-sd=30e3;B:share=0.5,k-mean=650e3,k-sd=30e3";
 
-// A 24-truck two-class log and its fit, shared by the predict and damage tests (128 particles).
+// A 24-truck two-class log and its fit (128 particles), made once and shared by the predict,
+// damage and weigh tests (which only read it).
 struct TwoClassFit {
   test::TempDir dir;
   std::string log = dir.file("log.csv"), post = dir.file("post.json");
@@ -55,6 +56,11 @@ struct TwoClassFit {
     REQUIRE(fit.status == 0);
   }
 };
+
+const TwoClassFit& two_class_fit() {
+  static const TwoClassFit fit;
+  return fit;
+}
 }  // namespace
 
 TEST_CASE("the WIM log's class column is read, written back and checked", "[io][classes]") {
@@ -231,7 +237,7 @@ TEST_CASE("a one-class log fits exactly as the same log without its class column
 }
 
 TEST_CASE("predict combines classes by traffic share, or as the user mixes them", "[cli][classes][predict]") {
-  TwoClassFit f;
+  const TwoClassFit& f = two_class_fit();
   const auto classes = io::read_posterior_classes(f.post);
   REQUIRE(classes.size() == 2);
   const site::Site site(site::load_road("AS1"), site::SiteOptions{});
@@ -320,7 +326,7 @@ TEST_CASE("damage combines classes: the mixture's moments, by share", "[cli][cla
     CHECK(p.static_esal_per_million == Approx(1e6 * esal(40e3)).epsilon(1e-12));
   }
   SECTION("from a two-class posterior: (1, 0) is class A alone, the default a1 the shares' weighted mean") {
-    TwoClassFit f;
+    const TwoClassFit& f = two_class_fit();
     const auto classes = io::read_posterior_classes(f.post);
     const site::Site site(site::load_road("AS1"), site::SiteOptions{});
     damage::DamageOptions o;
@@ -411,7 +417,7 @@ TEST_CASE("a class-labelled stream resumes exactly, and quarantines a class outs
 }
 
 TEST_CASE("weigh takes a class of a classes posterior", "[cli][classes][weigh]") {
-  TwoClassFit f;
+  const TwoClassFit& f = two_class_fit();
   const std::string forces = f.dir.file("forces.csv");
   REQUIRE(run_ssrfleet("simulate --trucks 2 --seed 2 --forces --quiet --out " + q(forces), f.dir).status == 0);
   const std::string args = "weigh " + q(forces) + " --posterior " + q(f.post) + " --draws 4 --trucks-per-draw 8 --quiet";
