@@ -137,8 +137,13 @@ void ClassCores::restore(BinaryReader& in, bool split) {
     if (!trucks_in) throw IoError("stream: cannot read '" + log + "'");
     BinaryReader trucks(trucks_in, log);
     c.fit->restore_split(in, trucks);
-    if (static_cast<std::uint64_t>(c.fit->trucks_seen()) != c.trucks_written) {
-      in.fail("trucks_written", "the checkpoint and the truck log '" + log + "' disagree on the truck count");
+  }
+}
+
+void ClassCores::check_counts(const BinaryReader& in) const {
+  for (const auto& [label, c] : cores_) {
+    if (c.fit->splits_state() && static_cast<std::uint64_t>(c.fit->trucks_seen()) != c.trucks_written) {
+      in.fail("trucks_written", "the checkpoint and the truck log '" + truck_log(label) + "' disagree on the truck count");
     }
   }
 }

@@ -48,6 +48,9 @@ class ClassCores {
   // Reads the checkpoint part: each class's core restored from it and its truck log (a tail
   // beyond the checkpoint's length cut off). `split`: the state was written by a splitting core.
   void restore(BinaryReader& in, bool split);
+  // After the checkpoint's seal was checked: each class's truck log holds the trucks its
+  // checkpoint counts (DataError naming the checkpoint otherwise).
+  void check_counts(const BinaryReader& in) const;
   bool splits_state() const;
 
  private:

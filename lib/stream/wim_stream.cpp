@@ -75,6 +75,7 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   const bool split = reader.value<std::uint8_t>("split") != 0;
   cores_.restore(reader, split);
   reader.check_seal("checkpoint");
+  cores_.check_counts(reader);
   if (!options_.classes.empty() && options_.classes != cores_.fixed()) {
     std::string fixed;
     for (const auto& c : cores_.fixed()) fixed += (fixed.empty() ? "" : ",") + c;
