@@ -93,9 +93,10 @@ void write_output(const std::string& path, const std::function<void(std::ostream
   io::write_file_atomically(path, write);
 }
 
-std::vector<records::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags) {
+std::vector<records::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags,
+                                              const io::WimLimits& limits) {
   int sensors = 0;
-  auto records = io::read_wim_log_file(path, site.options().unsprung_mass_kg, &sensors);
+  auto records = io::read_wim_log_file(path, site.options().unsprung_mass_kg, &sensors, limits);
   if (sensors != site.sensors()) {
     throw DataError(path, 1, "if_" + std::to_string(sensors),
                     "the log has " + std::to_string(sensors) + " sensors but the site has " +

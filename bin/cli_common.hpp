@@ -44,7 +44,9 @@ std::uint64_t parse_seed(const std::string& text, const std::string& option = "-
 
 // Reads a whole WIM log for `site`: DataError (line 1, the first IF column) when its sensor
 // count is not the site's, naming the --sensors value in use.
-std::vector<records::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags);
+// limits: what a record may hold (e.g. fhwa_classes).
+std::vector<records::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags,
+                                              const io::WimLimits& limits = {});
 
 // Positions along the road: "76,77.5,80" or "FIRST:STEP:LAST" (inclusive, e.g. 76:0.05:98.5);
 // "" = none (the caller's default). UsageError naming --positions when malformed.

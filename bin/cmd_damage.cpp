@@ -11,6 +11,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "damage/damage_profile.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "io/damage_csv.hpp"
 #include "io/gnuplot_runner.hpp"
 #include "io/posterior_json.hpp"
@@ -68,7 +69,7 @@ void print_summary(std::ostream& os, const records::DamageProfile& p) {
 }  // namespace
 
 int run_damage(int argc, const char* const argv[]) {
-  std::string posterior_path, state_dir, road = "AS1", out = "-", positions, seed_text = "1", png;
+  std::string posterior_path, state_dir, road = "AS1", out = "-", positions, seed_text = "1", png, class_label, mix_text;
   std::vector<double> extra_powers;
   bool new_road = false, quiet = false, fixed_traffic = false;
   damage::DamageOptions options;
@@ -90,6 +91,10 @@ int run_damage(int argc, const char* const argv[]) {
        "simulated trucks per theta draw (a Latin hypercube over the observed truck, k, k_t, z)")
       ("fixed-traffic", po::bool_switch(&fixed_traffic),
        "the observed trucks' speeds and masses as the traffic itself (default: a Bayesian bootstrap of them)")
+      ("class", po::value(&class_label), "a posterior of vehicle classes: this class alone")
+      ("mix", po::value(&mix_text),
+       "a posterior of vehicle classes: combine them in these traffic shares, e.g. A=0.7,B=0.3 (each >= 0, summing to "
+       "1; a class left out has share 0; default: each class's observed share)")
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
       ("out,o", po::value(&out)->default_value(out), "damage CSV to write ('-' = standard output)")
       ("png", po::value(&png), "also plot a4 (with its 95 % limits), a1 and the hot spots along the road here (gnuplot)")
@@ -110,18 +115,33 @@ int run_damage(int argc, const char* const argv[]) {
   options.seed = parse_seed(seed_text);
   options.traffic_bootstrap = !fixed_traffic;
   options.validate();
-  const auto cloud = io::read_posterior_file(source);
+  if (!class_label.empty() && !mix_text.empty()) throw UsageError("give --class or --mix, not both");
+  fleet::ClassPosteriors classes = io::read_posterior_classes(source);
+  if (fleet::unlabelled(classes) && (!class_label.empty() || !mix_text.empty())) {
+    throw UsageError(std::string(class_label.empty() ? "--mix" : "--class") + ": the posterior in '" + source +
+                     "' has no vehicle classes (its log had no class column)");
+  }
+  if (!class_label.empty()) classes = fleet::select_class(classes, class_label);
+  const std::vector<double> shares = fleet::class_shares(classes, fleet::parse_mix(mix_text));
+  const fleet::PosteriorCloud& cloud = classes.front().cloud;
+  long total_trucks = 0;
+  for (const auto& c : classes) total_trucks += c.cloud.trucks_seen;
   const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   if (!new_road) require_fitted_site(cloud, source, site, "; pass --new-road to assess a different road on purpose");
-  const auto profile = damage::predict_damage(cloud, site, parse_positions(positions), options);
+  const auto profile = damage::predict_damage_mixture(classes, shares, site, parse_positions(positions), options);
   write_output(out, [&](std::ostream& os) { io::write_damage_csv(os, profile); });
   if (!png.empty()) plot_damage(png, out, profile, quiet);
   // The summary is a result: standard output, unless the CSV went there.
   print_summary(out == "-" ? std::cerr : std::cout, profile);
   if (!quiet) {
     std::cerr << "ssrfleet damage: " << profile.position_m.size() << " positions on road " << site.surface().name
-              << " from " << cloud.trucks_seen << " trucks (" << cloud.method << "), " << profile.simulated_passes
-              << " simulated passes\n";
+              << " from " << total_trucks << " trucks (" << cloud.method << "), " << profile.simulated_passes
+              << " simulated passes";
+    if (!fleet::unlabelled(classes)) {
+      std::cerr << "; classes";
+      for (std::size_t c = 0; c < classes.size(); ++c) std::cerr << " " << classes[c].label << " (share " << shares[c] << ")";
+    }
+    std::cerr << "\n";
   }
   return 0;
 }

@@ -76,6 +76,11 @@ int run_diagnose(int argc, const char* const argv[]) {
   const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   for (const auto& name : o.candidates) fleet::make_extension(name, site);  // unknown names fail before any work
   const auto records = read_site_log(log_path, site, site_flags);
+  // Printed even with --quiet: it is about the answer. Classes are fitted apart by `fit`.
+  if (!records.empty() && !records.front().vehicle_class.empty()) {
+    std::cerr << "ssrfleet diagnose: warning: the log's class column is ignored: diagnose fits all its trucks as one "
+                 "fleet (fit the classes apart with `ssrfleet fit`, or diagnose each class's records alone)\n";
+  }
   if (!quiet) o.progress = &std::cerr;
   const auto result = discrepancy::diagnose(site, records, o);
   if (!json_path.empty()) {

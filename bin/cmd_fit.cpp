@@ -10,6 +10,7 @@
 #include "commands.hpp"
 #include "fit_methods.hpp"
 #include "fleet/posterior_summary.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "io/posterior_json.hpp"
 #include "io/wim_log.hpp"
 #include "model/model_spec.hpp"
@@ -21,7 +22,7 @@ namespace ssrfleet::cli {
 int run_fit(int argc, const char* const argv[]) {
   std::string log_path, road = "AS1", out = "posterior.json", seed_text = "1", method = "smc";
   FitFlags fit;
-  bool quiet = false;
+  bool quiet = false, fhwa = false;
   SiteFlags site_flags;
   po::options_description desc("fit options");
   desc.add_options()
@@ -31,6 +32,8 @@ int run_fit(int argc, const char* const argv[]) {
       ("out,o", po::value(&out)->default_value(out), "posterior file to write (JSON)")
       ("method", po::value(&method)->default_value(method), "smc (sequential, default) or mcmc (the paper's batch baseline)")
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
+      ("fhwa-classes", po::bool_switch(&fhwa),
+       "the log's class column must hold FHWA vehicle classes 1..13 (otherwise any label of A-Z a-z 0-9 _ . -)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   fit.add_to(desc);
   site_flags.add_to(desc);
@@ -49,18 +52,32 @@ int run_fit(int argc, const char* const argv[]) {
 
   const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   const fleet::ModelSpec model = fleet::parse_model_spec(fit.model, site);
-  const auto records = read_site_log(log_path, site, site_flags);
+  io::WimLimits limits;
+  limits.fhwa_classes = fhwa;
+  const auto records = read_site_log(log_path, site, site_flags, limits);
   if (!quiet) {
     std::cerr << "ssrfleet fit: " << records.size() << " trucks from " << log_path << ", road " << site.surface().name
               << ", method " << method << ", model " << model.text << ", seed " << seed << "\n";
   }
   const auto start = std::chrono::steady_clock::now();
   std::ostream* progress = quiet ? nullptr : &std::cerr;
-  const fleet::PosteriorCloud cloud = method == "smc" ? fit_smc(site, records, fit, seed, progress, model.extension.get())
-                                                      : fit_mcmc(site, records, fit, seed, progress, model.extension.get());
-  write_output(out, [&](std::ostream& os) {
-    os << io::posterior_to_json(cloud, fleet::summarise_cloud(cloud), fleet::summarise_psi(cloud)).dump(1) << "\n";
-  });
+  // One independent posterior per vehicle class (an unlabelled log is one class with the empty
+  // label and the seed itself), each seeded from the seed and its label (fleet/vehicle_classes.hpp).
+  fleet::ClassPosteriors classes;
+  std::vector<std::vector<fleet::ParameterSummary>> hyper, psi;
+  for (const auto& [label, class_records] : fleet::split_by_class(records)) {
+    const std::uint64_t class_seed = fleet::class_seed(seed, label);
+    if (!quiet && !label.empty()) {
+      std::cerr << "ssrfleet fit: class " << label << ": " << class_records.size() << " trucks, seed " << class_seed << "\n";
+    }
+    fleet::PosteriorCloud cloud =
+        method == "smc" ? fit_smc(site, class_records, fit, class_seed, progress, model.extension.get())
+                        : fit_mcmc(site, class_records, fit, class_seed, progress, model.extension.get());
+    hyper.push_back(fleet::summarise_cloud(cloud));
+    psi.push_back(fleet::summarise_psi(cloud));
+    classes.push_back({label, std::move(cloud)});
+  }
+  write_output(out, [&](std::ostream& os) { os << io::posterior_classes_to_json(classes, hyper, psi).dump(1) << "\n"; });
   if (!quiet) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cerr << "ssrfleet fit: done in " << std::fixed << std::setprecision(1) << s << " s -> " << out << "\n";

@@ -5,6 +5,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "io/posterior_json.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/road_source.hpp"
@@ -13,7 +14,7 @@
 namespace ssrfleet::cli {
 
 int run_predict(int argc, const char* const argv[]) {
-  std::string posterior_path, road = "AS1", out = "-", positions, seed_text = "1";
+  std::string posterior_path, road = "AS1", out = "-", positions, seed_text = "1", class_label, mix_text;
   bool new_road = false, quiet = false, fixed_traffic = false;
   predict::PredictionOptions options;
   SiteFlags site_flags;
@@ -30,6 +31,10 @@ int run_predict(int argc, const char* const argv[]) {
       ("fixed-traffic", po::bool_switch(&fixed_traffic),
        "take the observed trucks' speeds and masses as the traffic itself: the band of the mean then shows "
        "theta's uncertainty only (default: a Bayesian bootstrap of them adds the uncertainty of the traffic mix)")
+      ("class", po::value(&class_label), "a posterior of vehicle classes: predict this class alone")
+      ("mix", po::value(&mix_text),
+       "a posterior of vehicle classes: combine them in these traffic shares, e.g. A=0.7,B=0.3 (each >= 0, summing to "
+       "1; a class left out has share 0; default: each class's observed share)")
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
       ("out,o", po::value(&out)->default_value(out), "prediction CSV to write ('-' = standard output)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
@@ -41,15 +46,32 @@ int run_predict(int argc, const char* const argv[]) {
   }
   options.seed = parse_seed(seed_text);
   options.traffic_bootstrap = !fixed_traffic;
-  const auto cloud = io::read_posterior_file(posterior_path);
+  if (!class_label.empty() && !mix_text.empty()) throw UsageError("give --class or --mix, not both");
+  fleet::ClassPosteriors classes = io::read_posterior_classes(posterior_path);
+  if (fleet::unlabelled(classes) && (!class_label.empty() || !mix_text.empty())) {
+    throw UsageError(std::string(class_label.empty() ? "--mix" : "--class") + ": the posterior in '" + posterior_path +
+                     "' has no vehicle classes (its log had no class column)");
+  }
+  if (!class_label.empty()) classes = fleet::select_class(classes, class_label);
+  const std::vector<double> shares = fleet::class_shares(classes, fleet::parse_mix(mix_text));
+  const fleet::PosteriorCloud& cloud = classes.front().cloud;
   const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   if (!new_road) require_fitted_site(cloud, posterior_path, site, "; pass --new-road to predict for a different road on purpose");
-  const auto prediction = predict::predict_ssr(cloud, site, parse_positions(positions), options);
+  const auto prediction = predict::predict_ssr_mixture(classes, shares, site, parse_positions(positions), options);
   write_output(out, [&](std::ostream& os) { predict::write_prediction_csv(os, prediction); });
   if (!quiet) {
+    long total_trucks = 0;
+    for (const auto& c : classes) total_trucks += c.cloud.trucks_seen;
     std::cerr << "ssrfleet predict: " << prediction.position_m.size() << " positions on road " << site.surface().name
-              << " from " << cloud.trucks_seen << " trucks (" << cloud.method << ", model " << cloud.model << "), "
-              << options.theta_draws * options.trucks_per_draw << " simulated passes\n";
+              << " from " << total_trucks << " trucks (" << cloud.method << ", model " << cloud.model << "), "
+              << options.theta_draws * options.trucks_per_draw << " simulated passes";
+    if (!fleet::unlabelled(classes)) {
+      std::cerr << " per class; classes";
+      for (std::size_t c = 0; c < classes.size(); ++c) {
+        std::cerr << " " << classes[c].label << " (" << classes[c].cloud.trucks_seen << " trucks, share " << shares[c] << ")";
+      }
+    }
+    std::cerr << "\n";
   }
   return 0;
 }

@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cctype>
 #include <iostream>
+#include <sstream>
 #include <string>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "fleet/simulator.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "io/force_log.hpp"
 #include "io/static_weights_csv.hpp"
 #include "io/truck_list_csv.hpp"
@@ -37,6 +39,59 @@ std::vector<records::ForceRecord> to_force_records(const std::vector<records::Wi
   return out;
 }
 
+// --fleet-mix "A:share=0.6,k-mean=400e3;B:share=0.4": each class's share (required) and the
+// fleet parameters it changes from `base` (the command's own --k-mean, ...), named as those options.
+std::vector<fleet::ClassFleet> parse_fleet_mix(const std::string& text, const fleet::FleetDistribution& base) {
+  const auto bad = [&](const std::string& why) {
+    return UsageError("--fleet-mix '" + text + "': " + why +
+                      " (expected LABEL:share=S[,PARAM=VALUE...];LABEL:..., PARAM one of m2-mean, m2-sd, k-mean, k-sd, "
+                      "kt-mean, kt-sd, speed-mean, speed-sd, z-mean, z-sd)");
+  };
+  std::vector<fleet::ClassFleet> out;
+  std::stringstream classes(text);
+  std::string item;
+  while (std::getline(classes, item, ';')) {
+    const auto colon = item.find(':');
+    fleet::ClassFleet c;
+    c.label = item.substr(0, colon);
+    c.distribution = base;
+    c.share = -1.0;
+    if (colon == std::string::npos) throw bad("class '" + c.label + "' has no share");
+    std::stringstream params(item.substr(colon + 1));
+    std::string kv;
+    while (std::getline(params, kv, ',')) {
+      const auto eq = kv.find('=');
+      if (eq == std::string::npos) throw bad("'" + kv + "' is not PARAM=VALUE");
+      const std::string key = kv.substr(0, eq), value = kv.substr(eq + 1);
+      double x = 0.0;
+      try {
+        std::size_t used = 0;
+        x = std::stod(value, &used);
+        if (used != value.size()) throw std::invalid_argument(value);
+      } catch (const std::logic_error&) {
+        throw bad("'" + value + "' is not a number");
+      }
+      auto& d = c.distribution;
+      if (key == "share") c.share = x;
+      else if (key == "m2-mean") d.sprung_mass_kg.mean = x;
+      else if (key == "m2-sd") d.sprung_mass_kg.sd = x;
+      else if (key == "k-mean") d.stiffness_npm.mean = x;
+      else if (key == "k-sd") d.stiffness_npm.sd = x;
+      else if (key == "kt-mean") d.tyre_stiffness_npm.mean = x;
+      else if (key == "kt-sd") d.tyre_stiffness_npm.sd = x;
+      else if (key == "speed-mean") d.speed_mps.mean = x;
+      else if (key == "speed-sd") d.speed_mps.sd = x;
+      else if (key == "z-mean") d.lateral_m.mean = x;
+      else if (key == "z-sd") d.lateral_m.sd = x;
+      else throw bad("unknown parameter '" + key + "'");
+    }
+    if (c.share < 0.0) throw bad("class '" + c.label + "' has no share (share=S, S >= 0)");
+    out.push_back(std::move(c));
+  }
+  if (out.empty()) throw bad("no classes");
+  return out;
+}
+
 bool is_count(const std::string& s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
 }
@@ -44,7 +99,7 @@ bool is_count(const std::string& s) {
 
 int run_simulate(int argc, const char* const argv[]) {
   std::string road = "AS1", trucks_arg = "100", out = "-", truth, seed_text = "1", effect;
-  std::string static_weights;
+  std::string static_weights, fleet_mix;
   double noise = 0.02;
   bool quiet = false, forces = false, no_sprung_mass = false;
   SiteFlags site_flags;
@@ -68,6 +123,10 @@ int run_simulate(int argc, const char* const argv[]) {
        "log raw tyre forces force_1..force_M (N) instead of impact factors: a log for `ssrfleet weigh`")
       ("no-sprung-mass", po::bool_switch(&no_sprung_mass),
        "with --forces, leave the sprung_mass_kg column out (the static weight is what weigh estimates)")
+      ("fleet-mix", po::value(&fleet_mix),
+       "a fleet of vehicle classes: \"A:share=0.6,k-mean=400e3;B:share=0.4,k-mean=600e3\" (each class's traffic share, "
+       "summing to 1, and the fleet parameters below it changes, e.g. k-mean, m2-sd); each truck's class is drawn by "
+       "share and written in the log's class column (and the truth list's)")
       ("static-weights", po::value(&static_weights),
        "also write each truck's true static wheel load here (truck_id,static_kn,sprung_mass_kg)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
@@ -101,8 +160,12 @@ int run_simulate(int argc, const char* const argv[]) {
   if (is_count(trucks_arg)) {
     const long n = std::stol(trucks_arg);
     if (n < 1 || n > 10'000'000) throw UsageError("--trucks " + trucks_arg + ": must be between 1 and 10000000");
-    trucks = fleet::draw_fleet(dist, static_cast<int>(n), site.lateral_min_m(), site.lateral_max_m(), seed);
+    trucks = fleet_mix.empty()
+                 ? fleet::draw_fleet(dist, static_cast<int>(n), site.lateral_min_m(), site.lateral_max_m(), seed)
+                 : fleet::draw_class_fleet(parse_fleet_mix(fleet_mix, dist), static_cast<int>(n), site.lateral_min_m(),
+                                           site.lateral_max_m(), seed);
   } else {
+    if (!fleet_mix.empty()) throw UsageError("--fleet-mix draws the trucks: give --trucks N (a truck list may carry a class column instead)");
     trucks = io::read_truck_list_file(trucks_arg, site.lateral_min_m(), site.lateral_max_m());
   }
   const fleet::SimulationModel setting = fleet::parse_simulation_model(effect, site);

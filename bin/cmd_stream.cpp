@@ -6,11 +6,13 @@
 #include <atomic>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 #include <string>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "model/model_spec.hpp"
+#include "records/vehicle_class.hpp"
 #include "site/road_source.hpp"
 #include "stream/wim_stream.hpp"
 #include "util/errors.hpp"
@@ -34,7 +36,7 @@ void install_stop_handlers() {
 }  // namespace
 
 int run_stream(int argc, const char* const argv[]) {
-  std::string road = "AS1", input = "-", seed_text = "1", model_text = "base";
+  std::string road = "AS1", input = "-", seed_text = "1", model_text = "base", classes_text;
   bool quiet = false;
   long particles = 1024;
   int threads = 0;
@@ -58,6 +60,11 @@ int run_stream(int argc, const char* const argv[]) {
       ("window", po::value(&options.fit.latent.window)->default_value(0),
        "bounded memory on the latent core: keep and move only the last W trucks' latents, older ones as sufficient "
        "statistics (0 = the default exact marginal core, whose memory per truck is a table of a few KB)")
+      ("classes", po::value(&classes_text),
+       "fix the vehicle classes of a new state, e.g. A,B (default: each new label in the class column starts a class of "
+       "its own); a record of another class is quarantined in rejects.csv (field class); a resume keeps the state's list")
+      ("fhwa-classes", po::bool_switch(&options.limits.fhwa_classes),
+       "the class column must hold FHWA vehicle classes 1..13 (otherwise the record is quarantined)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   site_flags.add_to(desc);
   po::variables_map vm;
@@ -83,6 +90,20 @@ int run_stream(int argc, const char* const argv[]) {
   options.fit.sampler().seed = parse_seed(seed_text);
   std::string why;
   if (!options.fit.sampler().IsValid(&why)) throw UsageError(why);
+  if (!classes_text.empty()) {
+    std::stringstream ss(classes_text);
+    std::string label;
+    while (std::getline(ss, label, ',')) {
+      if (!records::is_class_label(label)) {
+        throw UsageError("--classes '" + classes_text + "': '" + label + "' is not a class label (one or more of A-Z a-z 0-9 _ . -)");
+      }
+      if (options.limits.fhwa_classes && !records::is_fhwa_class(label)) {
+        throw UsageError("--classes '" + classes_text + "': '" + label + "' is not an FHWA class (1 to 13)");
+      }
+      options.classes.insert(label);
+    }
+    if (options.classes.empty()) throw UsageError("--classes '" + classes_text + "': no class labels");
+  }
   if (options.follow && input == "-") throw UsageError("--follow needs --input FILE (standard input follows by itself)");
 
   install_stop_handlers();

@@ -7,6 +7,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "io/force_log.hpp"
 #include "io/posterior_json.hpp"
 #include "io/static_weights_csv.hpp"
@@ -17,7 +18,7 @@
 namespace ssrfleet::cli {
 
 int run_weigh(int argc, const char* const argv[]) {
-  std::string log_path, posterior_path, road = "AS1", out = "-", seed_text = "1";
+  std::string log_path, posterior_path, road = "AS1", out = "-", seed_text = "1", class_label;
   bool quiet = false;
   weigh::WeighOptions options;
   SiteFlags site_flags;
@@ -35,6 +36,8 @@ int run_weigh(int argc, const char* const argv[]) {
        "fixed point: stop when a step moves the estimate by less than this fraction")
       ("max-iterations", po::value(&options.max_iterations)->default_value(options.max_iterations),
        "fixed point: give up (an error) after this many steps")
+      ("class", po::value(&class_label),
+       "a posterior of vehicle classes: weigh every truck as one of this class (needed when it holds several)")
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (the same draws for every truck and step)")
       ("out,o", po::value(&out)->default_value(out), "weights CSV to write ('-' = standard output)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
@@ -48,7 +51,16 @@ int run_weigh(int argc, const char* const argv[]) {
   }
   options.prediction.seed = parse_seed(seed_text);
   options.validate();
-  const auto cloud = io::read_posterior_file(posterior_path);
+  fleet::ClassPosteriors classes = io::read_posterior_classes(posterior_path);
+  if (fleet::unlabelled(classes) && !class_label.empty()) {
+    throw UsageError("--class: the posterior in '" + posterior_path + "' has no vehicle classes (its log had no class column)");
+  }
+  if (!class_label.empty()) classes = fleet::select_class(classes, class_label);
+  if (classes.size() > 1) {
+    throw UsageError("the posterior in '" + posterior_path + "' holds vehicle classes " + fleet::list_labels(classes) +
+                     ": pick the trucks' class with --class");
+  }
+  const fleet::PosteriorCloud& cloud = classes.front().cloud;
   const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   require_fitted_site(cloud, posterior_path, site, "; weigh needs the road and site options the posterior was fitted with");
   const auto records = io::read_force_log_file(log_path, site.sensors(), "(--sensors " + site_flags.sensors + ")");

@@ -8,6 +8,7 @@
 #include <boost/random/mersenne_twister.hpp>
 
 #include "fleet/predictive_trucks.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "model/physical_effects.hpp"
 #include "util/errors.hpp"
 #include "util/quantile.hpp"
@@ -63,19 +64,36 @@ Band band(std::vector<double>& per_draw) {
 
 records::DamageProfile summarise_damage(const std::vector<double>& position_m, const Eigen::ArrayXXd& wheel_if,
                                         const Eigen::ArrayXd& static_load_n, int R, int T,
-                                        const DamageOptions& options) {
+                                        const DamageOptions& options, const Eigen::ArrayXd& truck_weight) {
   options.validate();
   const auto n_pos = static_cast<Eigen::Index>(position_m.size());
   const Eigen::Index columns = static_cast<Eigen::Index>(R) * T;
   if (R < 2 || T < 1 || wheel_if.rows() != n_pos || wheel_if.cols() != columns || static_load_n.size() != columns) {
     throw std::invalid_argument("summarise_damage: want positions x (R * T) impact factors and R * T static loads");
   }
+  const bool weighted = truck_weight.size() > 0;
+  if (weighted && (truck_weight.size() != T || (truck_weight < 0.0).any() || std::abs(truck_weight.sum() - 1.0) > 1e-9)) {
+    throw std::invalid_argument("summarise_damage: want T truck weights >= 0 summing to 1");
+  }
+  // The mean over θ draw r's trucks of f(column): plain (sum / T) or by the trucks' weights.
+  const auto draw_mean = [&](int r, const auto& f) {
+    double sum = 0.0;
+    if (!weighted) {
+      for (int t = 0; t < T; ++t) sum += f(static_cast<Eigen::Index>(r) * T + t);
+      return sum / T;
+    }
+    for (int t = 0; t < T; ++t) sum += truck_weight[t] * f(static_cast<Eigen::Index>(r) * T + t);
+    return sum;
+  };
   const std::vector<double> powers = options.powers();
   records::DamageProfile out;
   out.position_m = position_m;
   out.hot_spot_threshold = options.hot_spot_threshold;
   out.simulated_passes = static_cast<long>(columns);
-  out.lift_off_passes = static_cast<long>((wheel_if < 0.0).colwise().any().count());
+  for (Eigen::Index b = 0; b < columns; ++b) {
+    if ((!weighted || truck_weight[b % T] > 0.0) && (wheel_if.col(b) < 0.0).any()) ++out.lift_off_passes;
+  }
+  if (weighted) out.simulated_passes = static_cast<long>(R) * (truck_weight > 0.0).count();
   out.dlc.resize(position_m.size());
   out.hot_spot.resize(position_m.size());
   out.esal_per_million.resize(position_m.size());
@@ -93,7 +111,11 @@ records::DamageProfile summarise_damage(const std::vector<double>& position_m, c
   // ESAL of one wheel load P: (axle load / standard axle)^4 with the axle carrying two wheels.
   const auto esal = [](double wheel_load_n) { return power_of(kWheelsPerAxle * wheel_load_n / kStandardAxleN, 4.0); };
   double static_esal = 0.0;
-  for (Eigen::Index b = 0; b < columns; ++b) static_esal += esal(static_load_n[b]);
+  if (!weighted) {
+    for (Eigen::Index b = 0; b < columns; ++b) static_esal += esal(static_load_n[b]);
+  } else {
+    for (int r = 0; r < R; ++r) static_esal += T * draw_mean(r, [&](Eigen::Index b) { return esal(static_load_n[b]); });
+  }
   // The static damage averages over every θ draw's traffic (the bootstrap weighs the observed
   // trucks differently per draw, equally on average).
   out.static_esal_per_million = 1e6 * static_esal / static_cast<double>(columns);
@@ -104,9 +126,8 @@ records::DamageProfile summarise_damage(const std::vector<double>& position_m, c
     const auto i = static_cast<std::size_t>(m);
     for (std::size_t k = 0; k < powers.size(); ++k) {
       for (int r = 0; r < R; ++r) {
-        double sum = 0.0;
-        for (int t = 0; t < T; ++t) sum += power_of(std::max(0.0, wheel_if(m, static_cast<Eigen::Index>(r) * T + t)), powers[k]);
-        per_draw[static_cast<std::size_t>(r)] = sum / T;
+        per_draw[static_cast<std::size_t>(r)] =
+            draw_mean(r, [&](Eigen::Index b) { return power_of(std::max(0.0, wheel_if(m, b)), powers[k]); });
       }
       auto& a = out.powers[k];
       const Band b = band(per_draw);
@@ -120,17 +141,26 @@ records::DamageProfile summarise_damage(const std::vector<double>& position_m, c
     for (int r = 0; r < R; ++r) {
       // Plug-in moments over the T trucks (divide by T): the fleet's sd, consistent with a_n,
       // which are plug-in means too.
-      double s1 = 0.0, s2 = 0.0, e = 0.0;
-      for (int t = 0; t < T; ++t) {
-        const Eigen::Index b = static_cast<Eigen::Index>(r) * T + t;
-        const double x = wheel_if(m, b);
-        s1 += x;
-        s2 += x * x;
-        e += esal(std::max(0.0, x) * static_load_n[b]);
+      if (!weighted) {
+        double s1 = 0.0, s2 = 0.0, e = 0.0;
+        for (int t = 0; t < T; ++t) {
+          const Eigen::Index b = static_cast<Eigen::Index>(r) * T + t;
+          const double x = wheel_if(m, b);
+          s1 += x;
+          s2 += x * x;
+          e += esal(std::max(0.0, x) * static_load_n[b]);
+        }
+        const double mean = s1 / T;
+        dlc_draw[static_cast<std::size_t>(r)] = std::sqrt(std::max(0.0, s2 / T - mean * mean));
+        esal_draw[static_cast<std::size_t>(r)] = 1e6 * e / T;
+      } else {
+        // The mixture's moments: E[IF], E[IF^2] and the ESAL weighted over every class's trucks.
+        const double mean = draw_mean(r, [&](Eigen::Index b) { return wheel_if(m, b); });
+        const double second = draw_mean(r, [&](Eigen::Index b) { return wheel_if(m, b) * wheel_if(m, b); });
+        dlc_draw[static_cast<std::size_t>(r)] = std::sqrt(std::max(0.0, second - mean * mean));
+        esal_draw[static_cast<std::size_t>(r)] =
+            1e6 * draw_mean(r, [&](Eigen::Index b) { return esal(std::max(0.0, wheel_if(m, b)) * static_load_n[b]); });
       }
-      const double mean = s1 / T;
-      dlc_draw[static_cast<std::size_t>(r)] = std::sqrt(std::max(0.0, s2 / T - mean * mean));
-      esal_draw[static_cast<std::size_t>(r)] = 1e6 * e / T;
     }
     double dlc_sum = 0.0;
     for (double v : dlc_draw) dlc_sum += v;
@@ -143,11 +173,15 @@ records::DamageProfile summarise_damage(const std::vector<double>& position_m, c
   return out;
 }
 
-records::DamageProfile predict_damage(const fleet::PosteriorCloud& posterior, const site::Site& site,
-                                      std::vector<double> positions_m, const DamageOptions& options) {
-  options.validate();
-  if (positions_m.empty()) positions_m = site.sensor_positions_m();
-  const vehicle::PassIntegrator integrator(site.surface().dx_m, site.surface().samples(), positions_m);
+namespace {
+// One class's predictive trucks at the positions: the wheel IFs and static loads (θ-draw-major).
+struct Simulated {
+  Eigen::ArrayXXd wheel_if;
+  Eigen::ArrayXd static_load_n;
+};
+
+Simulated simulate(const fleet::PosteriorCloud& posterior, const site::Site& site,
+                   const vehicle::PassIntegrator& integrator, std::size_t n_pos, const DamageOptions& options) {
   boost::random::mt19937_64 engine(options.seed);
   fleet::PredictiveTraffic traffic;
   traffic.bootstrap = options.traffic_bootstrap;
@@ -160,11 +194,65 @@ records::DamageProfile predict_damage(const fleet::PosteriorCloud& posterior, co
   const fleet::PredictiveTrucks drawn =
       fleet::draw_predictive_trucks(posterior, site.lateral_min_m(), site.lateral_max_m(), options.theta_draws,
                                     options.trucks_per_draw, traffic, engine, effects.get());
-  Eigen::ArrayXXd wheel_if(static_cast<Eigen::Index>(positions_m.size()), drawn.trucks.size());
-  fleet::simulate_predictive_trucks(site, &integrator, posterior, drawn, effects.get(), wheel_if);
-  const Eigen::ArrayXd static_load_n =
-      (drawn.trucks.sprung_mass_kg + site.options().unsprung_mass_kg) * vehicle::gravity_mps2;
-  return summarise_damage(positions_m, wheel_if, static_load_n, options.theta_draws, options.trucks_per_draw, options);
+  Simulated out;
+  out.wheel_if.resize(static_cast<Eigen::Index>(n_pos), drawn.trucks.size());
+  fleet::simulate_predictive_trucks(site, &integrator, posterior, drawn, effects.get(), out.wheel_if);
+  out.static_load_n = (drawn.trucks.sprung_mass_kg + site.options().unsprung_mass_kg) * vehicle::gravity_mps2;
+  return out;
+}
+}  // namespace
+
+records::DamageProfile predict_damage(const fleet::PosteriorCloud& posterior, const site::Site& site,
+                                      std::vector<double> positions_m, const DamageOptions& options) {
+  options.validate();
+  if (positions_m.empty()) positions_m = site.sensor_positions_m();
+  const vehicle::PassIntegrator integrator(site.surface().dx_m, site.surface().samples(), positions_m);
+  const Simulated sim = simulate(posterior, site, integrator, positions_m.size(), options);
+  return summarise_damage(positions_m, sim.wheel_if, sim.static_load_n, options.theta_draws, options.trucks_per_draw,
+                          options);
+}
+
+records::DamageProfile predict_damage_mixture(const fleet::ClassPosteriors& classes, const std::vector<double>& shares,
+                                              const site::Site& site, std::vector<double> positions_m,
+                                              const DamageOptions& options) {
+  options.validate();
+  if (classes.empty() || shares.size() != classes.size()) {
+    throw std::invalid_argument("predict_damage_mixture: want one share per class");
+  }
+  std::vector<std::size_t> used;
+  for (std::size_t c = 0; c < classes.size(); ++c) {
+    if (shares[c] > 0.0) used.push_back(c);
+  }
+  if (used.empty()) throw UsageError("damage: every class has share 0");
+  const auto class_options = [&](std::size_t c) {
+    DamageOptions o = options;
+    o.seed = fleet::class_seed(options.seed, classes[c].label);
+    return o;
+  };
+  if (used.size() == 1) return predict_damage(classes[used[0]].cloud, site, std::move(positions_m), class_options(used[0]));
+
+  if (positions_m.empty()) positions_m = site.sensor_positions_m();
+  const vehicle::PassIntegrator integrator(site.surface().dx_m, site.surface().samples(), positions_m);
+  const int R = options.theta_draws, T = options.trucks_per_draw;
+  const auto C = static_cast<int>(used.size());
+  double total_share = 0.0;
+  for (const std::size_t c : used) total_share += shares[c];
+  // θ draw r of the mixture is draw r of every class (independent posteriors): its C T trucks,
+  // class by class, become the columns r C T + k T + t, truck t of class k weighing w_k / T.
+  Eigen::ArrayXXd wheel_if(static_cast<Eigen::Index>(positions_m.size()), static_cast<Eigen::Index>(R) * C * T);
+  Eigen::ArrayXd static_load_n(wheel_if.cols()), truck_weight(static_cast<Eigen::Index>(C) * T);
+  for (int k = 0; k < C; ++k) {
+    const std::size_t c = used[static_cast<std::size_t>(k)];
+    const Simulated sim = simulate(classes[c].cloud, site, integrator, positions_m.size(), class_options(c));
+    truck_weight.segment(static_cast<Eigen::Index>(k) * T, T).setConstant(shares[c] / total_share / T);
+    for (int r = 0; r < R; ++r) {
+      const Eigen::Index from = static_cast<Eigen::Index>(r) * T, to = (static_cast<Eigen::Index>(r) * C + k) * T;
+      wheel_if.middleCols(to, T) = sim.wheel_if.middleCols(from, T);
+      static_load_n.segment(to, T) = sim.static_load_n.segment(from, T);
+    }
+  }
+  truck_weight /= truck_weight.sum();
+  return summarise_damage(positions_m, wheel_if, static_load_n, R, C * T, options, truck_weight);
 }
 
 }  // namespace ssrfleet::damage

@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 
 #include "fleet/posterior_cloud.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "records/damage_profile.hpp"
 #include "site/site.hpp"
 
@@ -40,13 +41,25 @@ struct DamageOptions {
 // The pure summary, from simulated tyre forces: wheel_if is positions x (R * T) impact factors,
 // θ-draw-major (column r * T + t), static_load_n the static wheel load of each column. Needs
 // R >= 2 and T >= 1. A negative IF (lift-off) loads the pavement with nothing: it counts as 0.
+// truck_weight (empty = equal): T weights >= 0 summing to 1, truck t of every θ draw weighing
+// truck_weight[t] in that draw's expectations (a mixture of classes: a class's trucks weigh its
+// share over T); trucks of weight 0 count in no pass total.
 records::DamageProfile summarise_damage(const std::vector<double>& position_m, const Eigen::ArrayXXd& wheel_if,
                                         const Eigen::ArrayXd& static_load_n, int theta_draws, int trucks_per_draw,
-                                        const DamageOptions& options);
+                                        const DamageOptions& options, const Eigen::ArrayXd& truck_weight = {});
 
 // The whole computation: predictive trucks from the posterior, simulated at positions_m (strictly
 // increasing, on the road; empty = the site's sensors), summarised.
 records::DamageProfile predict_damage(const fleet::PosteriorCloud& posterior, const site::Site& site,
                                       std::vector<double> positions_m, const DamageOptions& options);
+
+// A mixture of vehicle classes (fleet/vehicle_classes.hpp), class c weighing shares[c]: each
+// class's predictive trucks drawn with the seed fleet::class_seed(options.seed, label) and
+// simulated; θ draw r of the mixture is draw r of every class (their posteriors are independent),
+// and every expectation over the fleet (a_n, DLC, ESAL, static ESAL) is over the mixture, each
+// class's trucks weighing its share. One class of share > 0 is exactly that class's predict_damage.
+records::DamageProfile predict_damage_mixture(const fleet::ClassPosteriors& classes, const std::vector<double>& shares,
+                                              const site::Site& site, std::vector<double> positions_m,
+                                              const DamageOptions& options);
 
 }  // namespace ssrfleet::damage

@@ -53,6 +53,7 @@ void add_records(SimulatedLog& log, const std::vector<records::Truck>& trucks, d
     const auto i = static_cast<Eigen::Index>(t);
     records::WimRecord r;
     r.truck_id = trucks[t].truck_id;
+    r.vehicle_class = trucks[t].vehicle_class;
     r.speed_mps = trucks[t].speed_mps;
     r.sprung_mass_kg = trucks[t].sprung_mass_kg;
     r.impact_factor = log.model_if.col(i).matrix();

@@ -24,8 +24,8 @@ CREATE TABLE IF NOT EXISTS reports(
   lines_consumed INTEGER NOT NULL, ess REAL NOT NULL, checkpoint_checksum TEXT NOT NULL,
   row_checksum TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS hyperparameters(
-  seq INTEGER NOT NULL, name TEXT NOT NULL, mean REAL NOT NULL, sd REAL NOT NULL, q025 REAL NOT NULL,
-  q975 REAL NOT NULL, PRIMARY KEY (seq, name));
+  seq INTEGER NOT NULL, class TEXT NOT NULL, name TEXT NOT NULL, mean REAL NOT NULL, sd REAL NOT NULL,
+  q025 REAL NOT NULL, q975 REAL NOT NULL, PRIMARY KEY (seq, class, name));
 CREATE TABLE IF NOT EXISTS predictions(
   seq INTEGER NOT NULL, position_m REAL NOT NULL, mean_if REAL NOT NULL, lower95 REAL NOT NULL,
   upper95 REAL NOT NULL, mean_lower95 REAL NOT NULL, mean_upper95 REAL NOT NULL,
@@ -121,6 +121,7 @@ std::uint64_t history_row_checksum(const records::HistoryReport& r) {
   add(r.ess);
   add(r.checkpoint_checksum);
   for (const auto& p : r.hyperparameters) {
+    add_text(p.vehicle_class);
     add_text(p.name);
     for (double v : {p.mean, p.sd, p.q025, p.q975}) add(v);
   }
@@ -234,15 +235,17 @@ void HistoryDb::append(const records::HistoryReport& r) {
     report.bind(7, hex(r.checkpoint_checksum));
     report.bind(8, hex(history_row_checksum(r)));
     report.run();
-    Statement hyper(db_, "INSERT INTO hyperparameters(seq, name, mean, sd, q025, q975) VALUES (?, ?, ?, ?, ?, ?);",
+    Statement hyper(db_,
+                    "INSERT INTO hyperparameters(seq, class, name, mean, sd, q025, q975) VALUES (?, ?, ?, ?, ?, ?, ?);",
                     path_);
     for (const auto& p : r.hyperparameters) {
       hyper.bind(1, static_cast<std::int64_t>(r.seq));
-      hyper.bind(2, p.name);
-      hyper.bind(3, p.mean);
-      hyper.bind(4, p.sd);
-      hyper.bind(5, p.q025);
-      hyper.bind(6, p.q975);
+      hyper.bind(2, p.vehicle_class);
+      hyper.bind(3, p.name);
+      hyper.bind(4, p.mean);
+      hyper.bind(5, p.sd);
+      hyper.bind(6, p.q025);
+      hyper.bind(7, p.q975);
       hyper.run();
     }
     Statement prediction(db_,
@@ -295,10 +298,14 @@ records::HistoryReport HistoryDb::read_report(std::uint64_t seq) const {
   r.checkpoint_checksum = std::strtoull(checkpoint_checksum.c_str(), nullptr, 16);
   {
     // rowid order is the order written, the one the checksum covers.
-    Statement hyper(db_, "SELECT name, mean, sd, q025, q975 FROM hyperparameters WHERE seq = ? ORDER BY rowid;",
+    Statement hyper(db_,
+                    "SELECT class, name, mean, sd, q025, q975 FROM hyperparameters WHERE seq = ? ORDER BY rowid;",
                     path_);
     hyper.bind(1, static_cast<std::int64_t>(seq));
-    while (hyper.next()) r.hyperparameters.push_back({hyper.text(0), hyper.real(1), hyper.real(2), hyper.real(3), hyper.real(4)});
+    while (hyper.next()) {
+      r.hyperparameters.push_back(
+          {hyper.text(0), hyper.text(1), hyper.real(2), hyper.real(3), hyper.real(4), hyper.real(5)});
+    }
   }
   {
     Statement prediction(db_,

@@ -7,7 +7,7 @@
 //   meta(key TEXT PRIMARY KEY, value TEXT)         schema_version, model
 //   reports(seq INTEGER PRIMARY KEY, trucks, time_s, source, lines_consumed, ess,
 //           checkpoint_checksum TEXT, row_checksum TEXT)
-//   hyperparameters(seq, name, mean, sd, q025, q975)                        PRIMARY KEY (seq, name)
+//   hyperparameters(seq, class, name, mean, sd, q025, q975)          PRIMARY KEY (seq, class, name)
 //   predictions(seq, position_m, mean_if, lower95, upper95, mean_lower95, mean_upper95)
 //                                                                          PRIMARY KEY (seq, position_m)
 // A checkpoint's rows are written in one transaction; the database runs in WAL mode, so readers

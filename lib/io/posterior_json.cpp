@@ -1,5 +1,6 @@
 #include "io/posterior_json.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -7,12 +8,14 @@
 
 #include "io/atomic_file.hpp"
 #include "model/fleet_model.hpp"
+#include "records/vehicle_class.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::io {
 
 namespace {
 constexpr int kFormatVersion = 1;
+constexpr int kClassesFormatVersion = 2;  // a file of vehicle classes
 
 // JSON has no NaN: a quantity that does not apply (MCMC log-evidence) is written as null.
 nlohmann::json number_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
@@ -92,92 +95,182 @@ T get_field(const nlohmann::json& j, const char* key, const std::string& file, c
   }
 }
 
-std::vector<double> finite_array(const nlohmann::json& j, const char* key, const std::string& file) {
-  auto v = get_field<std::vector<double>>(j, key, file, "cloud.");
+std::vector<double> finite_array(const nlohmann::json& j, const char* key, const std::string& file, const std::string& P) {
+  auto v = get_field<std::vector<double>>(j, key, file, P + "cloud.");
   for (double x : v) {
-    if (!std::isfinite(x)) throw DataError(file, 0, std::string("cloud.") + key, "holds a non-finite number");
+    if (!std::isfinite(x)) throw DataError(file, 0, P + "cloud." + key, "holds a non-finite number");
   }
   return v;
 }
 }  // namespace
 
-fleet::PosteriorCloud read_posterior_file(const std::string& path_in) {
-  std::string path = path_in;
-  if (std::filesystem::is_directory(path)) path = (std::filesystem::path(path) / "posterior.json").string();
-  std::ifstream in(path);
-  if (!in) throw MissingInputError("cannot open posterior file '" + path + "'");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw DataError(path, 0, "json", std::string("not valid JSON (") + e.what() + ")");
-  }
+namespace {
+// One posterior object (the whole single-class file, or one entry of "classes"); P prefixes the
+// fields' names in messages ("" or "classes[i].").
+fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std::string& path, const std::string& P) {
   fleet::PosteriorCloud c;
-  if (get_field<int>(j, "format_version", path, "") != kFormatVersion) {
-    throw DataError(path, 0, "format_version", "unsupported version (this ssrfleet reads " + std::to_string(kFormatVersion) + ")");
+  if (get_field<int>(j, "format_version", path, P) != kFormatVersion) {
+    throw DataError(path, 0, P + "format_version", "unsupported version (this ssrfleet reads " + std::to_string(kFormatVersion) + ")");
   }
-  c.method = get_field<std::string>(j, "method", path, "");
-  c.trucks_seen = get_field<long>(j, "trucks_seen", path, "");
-  c.ess = get_field<double>(j, "ess", path, "");
+  c.method = get_field<std::string>(j, "method", path, P);
+  c.trucks_seen = get_field<long>(j, "trucks_seen", path, P);
+  c.ess = get_field<double>(j, "ess", path, P);
   c.log_evidence = j.contains("log_evidence") && j["log_evidence"].is_number() ? j["log_evidence"].get<double>() : NAN;
   const auto& site = j.contains("site") ? j["site"] : nlohmann::json();
-  c.site_fingerprint = get_field<std::string>(site, "fingerprint", path, "site.");
-  c.road_name = get_field<std::string>(site, "road", path, "site.");
-  c.sensors = get_field<int>(site, "sensors", path, "site.");
-  c.lateral_min_m = get_field<double>(site, "lateral_min_m", path, "site.");
-  c.lateral_max_m = get_field<double>(site, "lateral_max_m", path, "site.");
+  c.site_fingerprint = get_field<std::string>(site, "fingerprint", path, P + "site.");
+  c.road_name = get_field<std::string>(site, "road", path, P + "site.");
+  c.sensors = get_field<int>(site, "sensors", path, P + "site.");
+  c.lateral_min_m = get_field<double>(site, "lateral_min_m", path, P + "site.");
+  c.lateral_max_m = get_field<double>(site, "lateral_max_m", path, P + "site.");
   const auto& cloud = j.contains("cloud") ? j["cloud"] : nlohmann::json();
-  const auto weights = finite_array(cloud, "weights", path);
-  c.speed_mps = finite_array(cloud, "speed_mps", path);
-  c.sprung_mass_kg = finite_array(cloud, "sprung_mass_kg", path);
-  const auto theta = get_field<std::vector<std::vector<double>>>(cloud, "theta", path, "cloud.");
+  const auto weights = finite_array(cloud, "weights", path, P);
+  c.speed_mps = finite_array(cloud, "speed_mps", path, P);
+  c.sprung_mass_kg = finite_array(cloud, "sprung_mass_kg", path, P);
+  const auto theta = get_field<std::vector<std::vector<double>>>(cloud, "theta", path, P + "cloud.");
   if (weights.empty() || theta.size() != weights.size()) {
-    throw DataError(path, 0, "cloud.theta", "needs one row per weight (" + std::to_string(weights.size()) + ")");
+    throw DataError(path, 0, P + "cloud.theta", "needs one row per weight (" + std::to_string(weights.size()) + ")");
   }
   if (c.speed_mps.empty() || c.speed_mps.size() != c.sprung_mass_kg.size()) {
-    throw DataError(path, 0, "cloud.speed_mps", "needs one speed and one sprung mass per observed truck");
+    throw DataError(path, 0, P + "cloud.speed_mps", "needs one speed and one sprung mass per observed truck");
   }
   c.theta.resize(fleet::kHyperCount, static_cast<Eigen::Index>(theta.size()));
   c.weights.resize(static_cast<Eigen::Index>(weights.size()));
   double total = 0.0;
   for (std::size_t i = 0; i < theta.size(); ++i) {
     if (theta[i].size() != fleet::kHyperCount) {
-      throw DataError(path, 0, "cloud.theta[" + std::to_string(i) + "]", "needs " + std::to_string(fleet::kHyperCount) + " values");
+      throw DataError(path, 0, P + "cloud.theta[" + std::to_string(i) + "]", "needs " + std::to_string(fleet::kHyperCount) + " values");
     }
     for (int h = 0; h < fleet::kHyperCount; ++h) {
       const double x = theta[i][static_cast<std::size_t>(h)];
-      if (!std::isfinite(x)) throw DataError(path, 0, "cloud.theta[" + std::to_string(i) + "]", "holds a non-finite number");
+      if (!std::isfinite(x)) throw DataError(path, 0, P + "cloud.theta[" + std::to_string(i) + "]", "holds a non-finite number");
       c.theta(h, static_cast<Eigen::Index>(i)) = x;
     }
-    if (weights[i] < 0.0) throw DataError(path, 0, "cloud.weights", "holds a negative weight");
+    if (weights[i] < 0.0) throw DataError(path, 0, P + "cloud.weights", "holds a negative weight");
     c.weights[static_cast<Eigen::Index>(i)] = weights[i];
     total += weights[i];
   }
-  if (!(total > 0.0)) throw DataError(path, 0, "cloud.weights", "all weights are zero");
+  if (!(total > 0.0)) throw DataError(path, 0, P + "cloud.weights", "all weights are zero");
   c.weights /= total;
   // The model: files written before models existed are the base model's.
-  c.model = j.contains("model") ? get_field<std::string>(j, "model", path, "") : "base";
-  if (c.model.empty()) throw DataError(path, 0, "model", "is empty (\"base\" or a model spec)");
+  c.model = j.contains("model") ? get_field<std::string>(j, "model", path, P) : "base";
+  if (c.model.empty()) throw DataError(path, 0, P + "model", "is empty (\"base\" or a model spec)");
   if (c.model != "base" && cloud.contains("psi")) {  // none when the spec fixes every parameter
-    c.psi_names = get_field<std::vector<std::string>>(cloud, "psi_names", path, "cloud.");
-    if (c.psi_names.empty()) throw DataError(path, 0, "cloud.psi_names", "empty for model '" + c.model + "'");
-    const auto rows = get_field<std::vector<std::vector<double>>>(cloud, "psi", path, "cloud.");
+    c.psi_names = get_field<std::vector<std::string>>(cloud, "psi_names", path, P + "cloud.");
+    if (c.psi_names.empty()) throw DataError(path, 0, P + "cloud.psi_names", "empty for model '" + c.model + "'");
+    const auto rows = get_field<std::vector<std::vector<double>>>(cloud, "psi", path, P + "cloud.");
     if (rows.size() != weights.size()) {
-      throw DataError(path, 0, "cloud.psi", "needs one row per weight (" + std::to_string(weights.size()) + ")");
+      throw DataError(path, 0, P + "cloud.psi", "needs one row per weight (" + std::to_string(weights.size()) + ")");
     }
     c.psi.resize(static_cast<Eigen::Index>(c.psi_names.size()), static_cast<Eigen::Index>(rows.size()));
     for (std::size_t i = 0; i < rows.size(); ++i) {
       if (rows[i].size() != c.psi_names.size()) {
-        throw DataError(path, 0, "cloud.psi[" + std::to_string(i) + "]",
+        throw DataError(path, 0, P + "cloud.psi[" + std::to_string(i) + "]",
                         "needs " + std::to_string(c.psi_names.size()) + " values (one per extension parameter)");
       }
       for (std::size_t k = 0; k < rows[i].size(); ++k) {
-        if (!std::isfinite(rows[i][k])) throw DataError(path, 0, "cloud.psi[" + std::to_string(i) + "]", "holds a non-finite number");
+        if (!std::isfinite(rows[i][k])) throw DataError(path, 0, P + "cloud.psi[" + std::to_string(i) + "]", "holds a non-finite number");
         c.psi(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(i)) = rows[i][k];
       }
     }
   }
   return c;
+}
+
+nlohmann::json parse_json_file(std::string path) {
+  if (std::filesystem::is_directory(path)) path = (std::filesystem::path(path) / "posterior.json").string();
+  std::ifstream in(path);
+  if (!in) throw MissingInputError("cannot open posterior file '" + path + "'");
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw DataError(path, 0, "json", std::string("not valid JSON (") + e.what() + ")");
+  }
+}
+
+std::string file_path(const std::string& path) {
+  return std::filesystem::is_directory(path) ? (std::filesystem::path(path) / "posterior.json").string() : path;
+}
+}  // namespace
+
+fleet::PosteriorCloud read_posterior_file(const std::string& path_in) {
+  const std::string path = file_path(path_in);
+  const nlohmann::json j = parse_json_file(path_in);
+  if (j.is_object() && j.contains("classes")) {
+    fleet::ClassPosteriors classes = read_posterior_classes(path_in);
+    throw DataError(path, 0, "classes",
+                    "holds a posterior per vehicle class (" + fleet::list_labels(classes) +
+                        "); this command reads a single-class posterior");
+  }
+  return parse_posterior_object(j, path, "");
+}
+
+fleet::ClassPosteriors read_posterior_classes(const std::string& path_in) {
+  const std::string path = file_path(path_in);
+  const nlohmann::json j = parse_json_file(path_in);
+  if (!j.is_object() || !j.contains("classes")) return {fleet::ClassPosterior{"", parse_posterior_object(j, path, "")}};
+  if (get_field<int>(j, "format_version", path, "") != kClassesFormatVersion) {
+    throw DataError(path, 0, "format_version",
+                    "unsupported version for a file of vehicle classes (this ssrfleet reads " +
+                        std::to_string(kClassesFormatVersion) + ")");
+  }
+  const auto& list = j["classes"];
+  if (!list.is_array() || list.empty()) throw DataError(path, 0, "classes", "must be a non-empty array");
+  fleet::ClassPosteriors out;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string P = "classes[" + std::to_string(i) + "].";
+    fleet::ClassPosterior c;
+    c.label = get_field<std::string>(list[i], "label", path, P);
+    if (!records::is_class_label(c.label)) {
+      throw DataError(path, 0, P + "label", "'" + c.label + "' is not a class label (one or more of A-Z a-z 0-9 _ . -)");
+    }
+    for (const auto& seen : out) {
+      if (seen.label == c.label) throw DataError(path, 0, P + "label", "class '" + c.label + "' appears twice");
+    }
+    c.cloud = parse_posterior_object(list[i], path, P);
+    if (get_field<long>(list[i], "trucks", path, P) != c.cloud.trucks_seen) {
+      throw DataError(path, 0, P + "trucks", "differs from the class's trucks_seen");
+    }
+    if (!out.empty() && c.cloud.site_fingerprint != out.front().cloud.site_fingerprint) {
+      throw DataError(path, 0, P + "site.fingerprint", "differs from the first class's: every class must be fitted on one site");
+    }
+    out.push_back(std::move(c));
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.label < b.label; });
+  return out;
+}
+
+nlohmann::json posterior_classes_to_json(const fleet::ClassPosteriors& classes,
+                                         const std::vector<std::vector<fleet::ParameterSummary>>& hyper,
+                                         const std::vector<std::vector<fleet::ParameterSummary>>& psi) {
+  if (classes.empty() || hyper.size() != classes.size() || psi.size() != classes.size()) {
+    throw std::invalid_argument("io::posterior_classes_to_json(): want one summary per class");
+  }
+  if (fleet::unlabelled(classes)) return posterior_to_json(classes.front().cloud, hyper.front(), psi.front());
+  const std::vector<double> shares = fleet::observed_shares(classes);
+  long total = 0;
+  for (const auto& c : classes) total += c.cloud.trucks_seen;
+  nlohmann::json list = nlohmann::json::array();
+  for (std::size_t k = 0; k < classes.size(); ++k) {
+    nlohmann::json e = posterior_to_json(classes[k].cloud, hyper[k], psi[k]);
+    e["label"] = classes[k].label;
+    e["trucks"] = classes[k].cloud.trucks_seen;
+    e["share"] = shares[k];
+    list.push_back(std::move(e));
+  }
+  nlohmann::json j;
+  j["format_version"] = kClassesFormatVersion;
+  j["trucks_seen"] = total;
+  j["method"] = classes.front().cloud.method;
+  j["site"] = list.front()["site"];
+  j["classes"] = std::move(list);
+  return j;
+}
+
+void write_posterior_classes_file(const std::string& path, const fleet::ClassPosteriors& classes,
+                                  const std::vector<std::vector<fleet::ParameterSummary>>& hyper,
+                                  const std::vector<std::vector<fleet::ParameterSummary>>& psi) {
+  const nlohmann::json j = posterior_classes_to_json(classes, hyper, psi);
+  write_file_atomically(path, [&](std::ostream& os) { os << j.dump(1) << "\n"; });
 }
 
 }  // namespace ssrfleet::io

@@ -11,6 +11,7 @@
 
 #include "fleet/posterior_cloud.hpp"
 #include "fleet/posterior_summary.hpp"
+#include "fleet/vehicle_classes.hpp"
 
 namespace ssrfleet::io {
 
@@ -26,11 +27,31 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& cloud,
 
 // Reads a posterior file, or the file `posterior.json` inside a directory (a stream's state
 // directory). Any missing or malformed field is a DataError naming the file and the field; a
-// missing file is a MissingInputError.
+// missing file is a MissingInputError. A file of several vehicle classes is a DataError (field
+// "classes") naming them: read it with read_posterior_classes.
 fleet::PosteriorCloud read_posterior_file(const std::string& path);
 
 void write_posterior_file(const std::string& path, const fleet::PosteriorCloud& cloud,
                           const std::vector<fleet::ParameterSummary>& hyper,
                           const std::vector<fleet::ParameterSummary>& psi = {});
+
+// A posterior per vehicle class (fleet/vehicle_classes.hpp). The file is
+//   {"format_version": 2, "trucks_seen": N, "site": {...}, "method": ...,
+//    "classes": [{"label": "A", "trucks": n_A, "share": n_A / N, ...the single-class object...}, ...]}
+// each class entry being exactly what posterior_to_json writes for that class's cloud, plus its
+// label, truck count and observed traffic share. An unlabelled fit (one class, empty label) is
+// written as the single-class file of posterior_to_json, unchanged. `hyper[c]`, `psi[c]` are the
+// summaries of class c.
+nlohmann::json posterior_classes_to_json(const fleet::ClassPosteriors& classes,
+                                         const std::vector<std::vector<fleet::ParameterSummary>>& hyper,
+                                         const std::vector<std::vector<fleet::ParameterSummary>>& psi);
+void write_posterior_classes_file(const std::string& path, const fleet::ClassPosteriors& classes,
+                                  const std::vector<std::vector<fleet::ParameterSummary>>& hyper,
+                                  const std::vector<std::vector<fleet::ParameterSummary>>& psi);
+
+// Reads either kind of posterior file (or a state directory's posterior.json): a single-class
+// file as one class with the empty label, a classes file as its classes sorted by label. Errors as
+// read_posterior_file, a class's fields named "classes[i].field".
+fleet::ClassPosteriors read_posterior_classes(const std::string& path);
 
 }  // namespace ssrfleet::io

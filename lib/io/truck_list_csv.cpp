@@ -1,11 +1,13 @@
 #include "io/truck_list_csv.hpp"
 
+#include <algorithm>
 #include <fstream>
 #include <limits>
 #include <sstream>
 #include <unordered_set>
 
 #include "io/csv_reader.hpp"
+#include "records/vehicle_class.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::io {
@@ -25,6 +27,7 @@ std::vector<records::Truck> read_truck_list_file(const std::string& path, double
     col[i] = column_index(header, names[i]);
     if (col[i] < 0) throw DataError(path, header_line, names[i], "required column is missing from the header");
   }
+  const long class_col = column_index(header, "class");  // optional: the trucks' vehicle classes
   std::vector<records::Truck> trucks;
   std::unordered_set<std::string> ids;
   while (csv.next(row)) {
@@ -54,6 +57,13 @@ std::vector<records::Truck> read_truck_list_file(const std::string& path, double
          << lateral_max_m << "] m";
       throw DataError(path, row.line, "z_m", os.str());
     }
+    if (class_col >= 0) {
+      t.vehicle_class = row.fields[static_cast<std::size_t>(class_col)];
+      if (!records::is_class_label(t.vehicle_class)) {
+        throw DataError(path, row.line, "class",
+                        "class label '" + t.vehicle_class + "' is not a label (one or more of A-Z a-z 0-9 _ . -)");
+      }
+    }
     trucks.push_back(std::move(t));
   }
   if (trucks.empty()) throw DataError(path, header_line + 1, "truck_id", "the truck list holds no trucks");
@@ -61,11 +71,15 @@ std::vector<records::Truck> read_truck_list_file(const std::string& path, double
 }
 
 void write_truck_list(std::ostream& out, const std::vector<records::Truck>& trucks) {
-  out << "truck_id,speed_mps,sprung_mass_kg,k_npm,kt_npm,z_m\n";
+  const bool with_class =
+      std::any_of(trucks.begin(), trucks.end(), [](const records::Truck& t) { return !t.vehicle_class.empty(); });
+  out << "truck_id,speed_mps,sprung_mass_kg,k_npm,kt_npm,z_m" << (with_class ? ",class" : "") << "\n";
   out.precision(std::numeric_limits<double>::max_digits10);
   for (const auto& t : trucks) {
     out << t.truck_id << "," << t.speed_mps << "," << t.sprung_mass_kg << "," << t.stiffness_npm << ","
-        << t.tyre_stiffness_npm << "," << t.lateral_m << "\n";
+        << t.tyre_stiffness_npm << "," << t.lateral_m;
+    if (with_class) out << "," << t.vehicle_class;
+    out << "\n";
   }
 }
 

@@ -1,10 +1,12 @@
 #include "io/wim_log.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <sstream>
 
+#include "records/vehicle_class.hpp"
 #include "util/errors.hpp"
 #include "vehicle/quarter_car.hpp"
 
@@ -49,6 +51,7 @@ WimLogReader::WimLogReader(std::istream& in, std::string source_name, double uns
   speed_col_ = require("speed_mps");
   mass_col_ = require("sprung_mass_kg");
   time_col_ = column_index(h, "time_s");
+  class_col_ = column_index(h, "class");
   std::vector<std::string> if_names, force_names;
   const auto if_cols = numbered_columns(h, "if_", if_names);
   const auto force_cols = numbered_columns(h, "force_", force_names);
@@ -77,6 +80,22 @@ records::WimRecord WimLogReader::parse(const CsvRow& row) const {
   r.truck_id = row.fields[static_cast<std::size_t>(id_col_)];
   if (r.truck_id.empty()) throw DataError(src, row.line, "truck_id", "empty truck_id");
   if (seen_.count(r.truck_id)) throw DataError(src, row.line, "truck_id", "duplicate truck_id '" + r.truck_id + "'");
+  if (class_col_ >= 0) {
+    const std::string& label = row.fields[static_cast<std::size_t>(class_col_)];
+    if (!records::is_class_label(label)) {
+      throw DataError(src, row.line, "class",
+                      "class label '" + label + "' is not a label (one or more of A-Z a-z 0-9 _ . -)");
+    }
+    if (limits_.fhwa_classes && !records::is_fhwa_class(label)) {
+      throw DataError(src, row.line, "class", "class label '" + label + "' is not an FHWA class (1 to 13)");
+    }
+    if (!classes_.empty() && !classes_.count(label)) {
+      std::string known;
+      for (const auto& c : classes_) known += (known.empty() ? "" : ", ") + c;
+      throw DataError(src, row.line, "class", "class '" + label + "' is not one of the classes fixed for this input (" + known + ")");
+    }
+    r.vehicle_class = label;
+  }
   if (time_col_ >= 0) r.time_s = parse_finite(row.fields[static_cast<std::size_t>(time_col_)], src, row.line, "time_s");
   r.speed_mps = parse_finite(row.fields[static_cast<std::size_t>(speed_col_)], src, row.line, "speed_mps");
   if (r.speed_mps < limits_.min_speed_mps || r.speed_mps > limits_.max_speed_mps) {
@@ -124,10 +143,11 @@ WimLogReader::Status WimLogReader::next(records::WimRecord& record, Rejection& w
   }
 }
 
-std::vector<records::WimRecord> read_wim_log_file(const std::string& path, double unsprung_mass_kg, int* sensors_out) {
+std::vector<records::WimRecord> read_wim_log_file(const std::string& path, double unsprung_mass_kg, int* sensors_out,
+                                                  const WimLimits& limits) {
   std::ifstream in(path);
   if (!in) throw MissingInputError("cannot open WIM log '" + path + "'");
-  WimLogReader reader(in, path, unsprung_mass_kg);
+  WimLogReader reader(in, path, unsprung_mass_kg, limits);
   std::vector<records::WimRecord> records;
   records::WimRecord r;
   Rejection why;
@@ -146,8 +166,11 @@ std::vector<records::WimRecord> read_wim_log_file(const std::string& path, doubl
 void write_wim_log(std::ostream& out, const std::vector<records::WimRecord>& records) {
   const Eigen::Index sensors = records.empty() ? 0 : records.front().impact_factor.size();
   const bool with_time = !records.empty() && records.front().time_s.has_value();
+  const bool with_class =
+      std::any_of(records.begin(), records.end(), [](const records::WimRecord& r) { return !r.vehicle_class.empty(); });
   out << "truck_id";
   if (with_time) out << ",time_s";
+  if (with_class) out << ",class";
   out << ",speed_mps,sprung_mass_kg";
   for (Eigen::Index m = 1; m <= sensors; ++m) out << ",if_" << m;
   out << "\n";
@@ -155,6 +178,7 @@ void write_wim_log(std::ostream& out, const std::vector<records::WimRecord>& rec
   for (const auto& r : records) {
     out << r.truck_id;
     if (with_time) out << "," << r.time_s.value_or(0.0);
+    if (with_class) out << "," << r.vehicle_class;
     out << "," << r.speed_mps << "," << r.sprung_mass_kg;
     for (Eigen::Index m = 0; m < r.impact_factor.size(); ++m) out << "," << r.impact_factor[m];
     out << "\n";

@@ -1,6 +1,7 @@
 // The WIM-log CSV of DESIGN.md §7: header first, '#' lines are comments. Columns `truck_id`
-// (unique), `time_s` (optional), `speed_mps`, `sprung_mass_kg`, then either `if_1`..`if_M`
-// (impact factors) or `force_1`..`force_M` (tyre force, N). Extra columns are ignored.
+// (unique), `time_s` (optional), `class` (optional: the truck's vehicle class, a label of
+// [A-Za-z0-9_.-]+, records/vehicle_class.hpp), `speed_mps`, `sprung_mass_kg`, then either
+// `if_1`..`if_M` (impact factors) or `force_1`..`force_M` (tyre force, N). Extra columns are ignored.
 //
 // The reader is incremental and never stops on a bad record: it hands the record back as a
 // Rejection (line, verbatim text, field, reason), so a stream can quarantine it and go on, and
@@ -11,8 +12,10 @@
 #include <istream>
 #include <optional>
 #include <ostream>
+#include <set>
 #include <string>
 #include <unordered_set>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -40,6 +43,8 @@ struct WimLimits {
   double max_sprung_mass_kg = 60000.0;
   double min_impact_factor = 0.0;
   double max_impact_factor = 4.0;
+  // The `class` column must hold FHWA's classes "1".."13" (otherwise any label).
+  bool fhwa_classes = false;
 };
 
 class WimLogReader {
@@ -54,6 +59,7 @@ class WimLogReader {
 
   int sensors() const { return sensors_; }
   bool reads_forces() const { return forces_; }
+  bool has_classes() const { return class_col_ >= 0; }  // the header has a `class` column
   const std::string& source_name() const { return csv_.source_name(); }
   const std::string& header_line() const { return header_raw_; }
 
@@ -64,6 +70,9 @@ class WimLogReader {
   // one of these ids is rejected as a duplicate.
   void mark_seen(const std::string& truck_id) { seen_.insert(truck_id); }
   void set_follow(bool follow) { csv_.set_follow(follow); }
+  // The only classes accepted (empty = any label): a record of another class is rejected, field
+  // `class` (a stream whose classes were fixed when its state was made).
+  void set_classes(std::set<std::string> classes) { classes_ = std::move(classes); }
 
  private:
   records::WimRecord parse(const CsvRow& row) const;
@@ -73,19 +82,21 @@ class WimLogReader {
   WimLimits limits_;
   std::string header_raw_;
   std::size_t header_fields_ = 0;
-  long id_col_ = -1, time_col_ = -1, speed_col_ = -1, mass_col_ = -1;
+  long id_col_ = -1, time_col_ = -1, class_col_ = -1, speed_col_ = -1, mass_col_ = -1;
   std::vector<long> value_cols_;
   std::vector<std::string> value_names_;
   int sensors_ = 0;
   bool forces_ = false;
   std::unordered_set<std::string> seen_;
+  std::set<std::string> classes_;
 };
 
 // Reads a whole log; the first bad record is an error (DataError naming file, line, field).
 std::vector<records::WimRecord> read_wim_log_file(const std::string& path, double unsprung_mass_kg,
-                                         int* sensors_out = nullptr);
+                                                  int* sensors_out = nullptr, const WimLimits& limits = {});
 
-// Writes records as a WIM log with if_ columns, full precision (round trips bit-exactly).
+// Writes records as a WIM log with if_ columns, full precision (round trips bit-exactly); with a
+// `class` column when any record has a class.
 void write_wim_log(std::ostream& out, const std::vector<records::WimRecord>& records);
 
 }  // namespace ssrfleet::io

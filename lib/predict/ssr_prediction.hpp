@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 
 #include "fleet/posterior_cloud.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "site/site.hpp"
 
 namespace ssrfleet::predict {
@@ -39,6 +40,19 @@ struct SsrPrediction {
 // positions_m: where to predict (strictly increasing, on the road); empty = the site's sensors.
 SsrPrediction predict_ssr(const fleet::PosteriorCloud& posterior, const site::Site& site,
                           std::vector<double> positions_m, const PredictionOptions& options);
+
+// A mixture of vehicle classes (fleet/vehicle_classes.hpp), class c weighing shares[c] (>= 0,
+// one per class; fleet::class_shares checks a user's mix). Each class's predictive trucks are
+// drawn and simulated as predict_ssr does, with the seed fleet::class_seed(options.seed, label).
+// The mean IF is the share-weighted mean of the classes'; the prediction limits are the quantiles
+// of the mixture of the classes' predictive draws (util/quantile.hpp weighted_quantile), not an
+// average of limits; the band of the mean pattern is over θ draws, draw r of the mixture being
+// draw r of every class (independent posteriors), its mean the share-weighted mean. A mixture
+// with one class of share > 0 is exactly that class's predict_ssr (an unlabelled posterior: the
+// prediction of today).
+SsrPrediction predict_ssr_mixture(const fleet::ClassPosteriors& classes, const std::vector<double>& shares,
+                                  const site::Site& site, std::vector<double> positions_m,
+                                  const PredictionOptions& options);
 
 // The CSV of DESIGN.md §7: position_m,mean_if,lower95,upper95,mean_lower95,mean_upper95.
 void write_prediction_csv(std::ostream& out, const SsrPrediction& prediction);

@@ -9,6 +9,7 @@
 namespace ssrfleet::records {
 
 struct HyperparameterSummaryRow {
+  std::string vehicle_class;  // the class's label ("" for a log without a class column)
   std::string name;  // fleet_model.hpp's hyperparameter names, then the extension's parameters
   double mean = 0.0, sd = 0.0, q025 = 0.0, q975 = 0.0;
 };
@@ -25,7 +26,7 @@ struct HistoryReport {
   double time_s = 0.0;        // Unix time (s) when the row set was written
   std::string source;         // the input the stream was reading
   std::uint64_t lines_consumed = 0;
-  double ess = 0.0;           // the particle cloud's effective sample size
+  double ess = 0.0;           // the particle cloud's effective sample size (the smallest over classes)
   std::uint64_t checkpoint_checksum = 0;  // the seal of checkpoint.bin number `seq`
   std::vector<HyperparameterSummaryRow> hyperparameters;
   std::vector<PredictionRow> predictions;

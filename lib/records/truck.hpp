@@ -16,6 +16,7 @@ struct Truck {
   double stiffness_npm = 500e3;       // k
   double tyre_stiffness_npm = 1950e3; // k_t
   double lateral_m = 1.5;             // z
+  std::string vehicle_class;          // records/vehicle_class.hpp; "" = unlabelled
 };
 
 }  // namespace ssrfleet::records

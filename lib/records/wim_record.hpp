@@ -16,6 +16,7 @@ struct WimRecord {
   double speed_mps = 0.0;
   double sprung_mass_kg = 0.0;
   Eigen::VectorXd impact_factor;  // one per sensor, in sensor order
+  std::string vehicle_class;      // the log's `class` column (records/vehicle_class.hpp); "" = unlabelled
   std::size_t line = 0;           // where it came from
 };
 

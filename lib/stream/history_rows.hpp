@@ -1,5 +1,6 @@
-// What the stream's history (io/history_db.hpp) stores at a checkpoint: the posterior's summaries
-// and a light SSR prediction, computed from the cloud the checkpoint holds. A pure function of the
+// What the stream's history (io/history_db.hpp) stores at a checkpoint: each class's posterior
+// summaries and a light SSR prediction of the classes' mixture at their observed shares (the one
+// posterior itself without classes), computed from the clouds the checkpoint holds. A pure function of the
 // cloud, the seq and the options, so a resume that must write a missing row set writes exactly the
 // rows the interrupted run would have (only time_s differs).
 #pragma once
@@ -7,7 +8,7 @@
 #include <cstdint>
 #include <string>
 
-#include "fleet/posterior_cloud.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "records/history_report.hpp"
 #include "site/site.hpp"
@@ -18,12 +19,11 @@ struct HistoryRowsInput {
   std::uint64_t seq = 0;
   std::string source;
   std::uint64_t lines_consumed = 0;
-  double ess = 0.0;
   std::uint64_t checkpoint_checksum = 0;
 };
 
 // The prediction's seed is options.seed + seq: every checkpoint's prediction is reproducible.
-records::HistoryReport history_rows(const fleet::PosteriorCloud& cloud, const site::Site& site,
+records::HistoryReport history_rows(const fleet::ClassPosteriors& classes, const site::Site& site,
                                     const predict::PredictionOptions& options, const HistoryRowsInput& input);
 
 }  // namespace ssrfleet::stream

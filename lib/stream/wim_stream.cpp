@@ -24,37 +24,22 @@ namespace fs = std::filesystem;
 namespace {
 std::string path_in(const std::string& dir, const char* name) { return (fs::path(dir) / name).string(); }
 // The stream checkpoint's header (bookkeeping first, then the core's state, with the marginal
-// core's truck log beside it), sealed with a checksum (binary_io.hpp). Version 4 adds the
-// checkpoint's sequence number (the history names it) and the truck log's generation header;
-// version 3 recorded the model and carried the checksums; version 2 had neither; version 1 began
-// with the core's own magic word.
+// core's truck log beside it), sealed with a checksum (binary_io.hpp). Version 4 holds a core per
+// vehicle class (class_cores.hpp), the checkpoint's sequence number (the history names it) and
+// truck logs with a generation header; version 3 recorded the model and carried the checksums;
+// version 2 had neither; version 1 began with the core's own magic word.
 constexpr std::uint64_t kStreamMagic = 0x4d52545346525353ULL;       // "SSRFSTRM"
 constexpr std::uint32_t kStreamVersion = 4;
 constexpr std::uint64_t kOldCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
-constexpr std::uint64_t kTruckLogMagic = 0x534b525446525353ULL;       // "SSRFTRKS"
-
-// The truck log's header: which generation of tables its records hold.
-void write_truck_log_header(BinaryWriter& out, std::int32_t generation) {
-  out.value(kTruckLogMagic);
-  out.value(generation);
-  out.seal();
-}
-std::int32_t read_truck_log_header(BinaryReader& in) {
-  if (in.value<std::uint64_t>("magic") != kTruckLogMagic) in.fail("magic", "not an ssrfleet truck log");
-  const auto generation = in.value<std::int32_t>("generation");
-  in.check_seal("header");
-  return generation;
-}
-std::int32_t truck_log_generation(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("stream: cannot read '" + path + "'");
-  BinaryReader reader(in, path);
-  return read_truck_log_header(reader);
-}
 }  // namespace
 
 WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream* progress, std::ostream& reports)
-    : site_(site), options_(std::move(options)), progress_(progress), reports_(reports), smc_(fleet::make_online_fit(site, options_.fit)) {
+    : site_(site),
+      options_(std::move(options)),
+      progress_(progress),
+      reports_(reports),
+      cores_(site, options_.fit, options_.state_dir) {
+  fleet::make_online_fit(site, options_.fit);  // UsageError now on bad options, as before classes
   if (options_.state_dir.empty()) throw UsageError("stream: a state directory is required (--state DIR)");
   if (options_.report_every < 0) throw UsageError("stream: --report-every must be >= 0");
   std::error_code ec;
@@ -69,12 +54,11 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   const bool caught_up = open_history();
   if (resumed_ && !caught_up) {
     // posterior.json may lag the checkpoint if the last run failed after the history's commit.
-    const fleet::PosteriorCloud cloud = smc_->cloud();
-    io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), cloud, fleet::summarise_cloud(cloud),
-                             fleet::summarise_psi(cloud));
+    write_posterior(cores_.posteriors());
   }
   if (resumed_ && progress_) {
-    *progress_ << "stream: resumed from " << checkpoint << " with " << smc_->trucks_seen() << " trucks absorbed\n";
+    *progress_ << "stream: resumed from " << checkpoint << " with " << cores_.trucks_seen() << " trucks absorbed"
+               << (cores_.labelled() ? " in classes " + cores_.labels() : std::string()) << "\n";
   }
 }
 
@@ -90,7 +74,9 @@ void WimStream::restore_checkpoint(const std::string& checkpoint) {
   if (magic != kStreamMagic) reader.fail("magic", "not an ssrfleet stream checkpoint");
   const auto version = reader.value<std::uint32_t>("version");
   if (version != kStreamVersion) {
-    const char* what = version == 2 ? " (before checksums and models)" : version == 3 ? " (before the history)" : "";
+    const char* what = version == 2 ? " (before checksums and models)"
+                       : version == 3 ? " (before vehicle classes and the history)"
+                                      : "";
     reader.fail("version", "stream state format version " + std::to_string(version) + what + ", this build reads " +
                                std::to_string(kStreamVersion) + ": replay the log into a new state directory");
   }
@@ -104,22 +90,16 @@ void WimStream::restore_checkpoint(const std::string& checkpoint) {
   checkpoint_lines_ = reader.value<std::uint64_t>("lines_consumed");
   rejects_bytes_ = reader.value<std::uint64_t>("rejects_bytes");
   const bool split = reader.value<std::uint8_t>("split") != 0;
-  trucks_written_ = reader.value<std::uint64_t>("trucks_written");
-  trucks_bytes_ = reader.value<std::uint64_t>("trucks_bytes");
-  trucks_generation_ = reader.value<std::int32_t>("trucks_generation");
-  if (split != smc_->splits_state()) {
-    reader.fail("core", std::string("the state was written by the ") + (split ? "marginal" : "latent") +
-                            " core; resume it with the same core (--window selects the latent one)");
-  }
-  if (split) {
-    restore_truck_log(reader);
-  } else {
-    smc_->restore(reader);
-  }
+  cores_.restore(reader, split);
   reader.check_seal("checkpoint");
   checkpoint_checksum_ = reader.last_seal();
-  if (split && static_cast<std::uint64_t>(smc_->trucks_seen()) != trucks_written_) {
-    reader.fail("trucks_written", "the checkpoint and the truck log disagree on the truck count");
+  cores_.check_counts(reader);
+  if (!options_.classes.empty() && options_.classes != cores_.fixed()) {
+    std::string fixed;
+    for (const auto& c : cores_.fixed()) fixed += (fixed.empty() ? "" : ",") + c;
+    throw UsageError("stream: the state in '" + options_.state_dir + "' was made with " +
+                     (fixed.empty() ? std::string("no fixed classes") : "--classes " + fixed) +
+                     "; a resume keeps its classes (leave --classes out or give the same list)");
   }
   resumed_ = true;
   // Records rejected after the checkpoint will be read and rejected again: cut them off here so
@@ -128,43 +108,12 @@ void WimStream::restore_checkpoint(const std::string& checkpoint) {
   if (fs::exists(rejects) && fs::file_size(rejects) > rejects_bytes_) fs::resize_file(rejects, rejects_bytes_);
 }
 
-// Brings trucks.bin to the checkpoint's generation and length, then restores the core from both.
-void WimStream::restore_truck_log(BinaryReader& checkpoint) {
-  const std::string log = path_in(options_.state_dir, "trucks.bin");
-  const std::string next = log + ".next";
-  if (fs::exists(next)) {
-    // A rewrite that stopped before its rename: finish it if the checkpoint already names it,
-    // drop it if the checkpoint never got that far.
-    if (truck_log_generation(next) == trucks_generation_) {
-      fs::rename(next, log);
-    } else {
-      fs::remove(next);
-    }
-  }
-  if (!fs::exists(log) || fs::file_size(log) < trucks_bytes_) {
-    checkpoint.fail("trucks_bytes", "'" + log + "' is missing or shorter than the checkpoint says (" +
-                                        std::to_string(trucks_bytes_) + " bytes)");
-  }
-  // A crash between appending to the truck log and this checkpoint leaves a tail: cut it off.
-  if (fs::file_size(log) > trucks_bytes_) fs::resize_file(log, trucks_bytes_);
-  std::ifstream trucks_in(log, std::ios::binary);
-  if (!trucks_in) throw IoError("stream: cannot read '" + log + "'");
-  BinaryReader trucks(trucks_in, log);
-  const std::int32_t generation = read_truck_log_header(trucks);
-  if (generation != trucks_generation_) {
-    trucks.fail("generation", "the truck log holds tables of generation " + std::to_string(generation) +
-                                  ", the checkpoint names generation " + std::to_string(trucks_generation_));
-  }
-  smc_->restore_split(checkpoint, trucks);
-}
-
 // The history must end at this checkpoint, or one short of it (a failure between the checkpoint's
 // rename and the history's commit): then the missing row set is written now, from the restored
 // cloud, exactly as the interrupted run would have written it (and posterior.json with it: true).
 bool WimStream::open_history() {
   history_ = std::make_unique<io::HistoryDb>(path_in(options_.state_dir, "history.sqlite"), model_text());
-  const std::optional<std::uint64_t> last = history_->last_seq();
-  const std::uint64_t have = last.value_or(0);
+  const std::uint64_t have = history_->last_seq().value_or(0);
   if (have == seq_) {
     if (seq_ > 0 && history_->read_report(seq_).checkpoint_checksum != checkpoint_checksum_) {
       throw DataError(history_->path(), 0, "checkpoint_checksum",
@@ -184,29 +133,10 @@ bool WimStream::open_history() {
 }
 
 void WimStream::save_state(const std::string& source, std::size_t lines_consumed) {
-  bool rewrote_log = false;
-  const std::string log = path_in(options_.state_dir, "trucks.bin");
-  if (smc_->splits_state()) {
-    const auto n = static_cast<std::uint64_t>(smc_->trucks_seen());
-    if (smc_->table_generation() != trucks_generation_ || trucks_written_ > n) {
-      // New tables: a whole new log beside the old one, which stays until the checkpoint names it.
-      trucks_generation_ = smc_->table_generation();
-      io::write_file_atomically(log + ".next", [&](std::ostream& os) {
-        BinaryWriter out(os);
-        write_truck_log_header(out, trucks_generation_);
-        smc_->save_trucks(out, 0, n);
-      });
-      trucks_bytes_ = fs::file_size(log + ".next");
-      rewrote_log = true;
-    } else if (n > trucks_written_) {
-      std::ostringstream records;
-      BinaryWriter out(records);
-      smc_->save_trucks(out, trucks_written_, n);
-      io::append_file_synced(log, records.str());
-      trucks_bytes_ += records.str().size();
-    }
-    trucks_written_ = n;
-  }
+  // The truck logs first (class_cores.hpp), then the checkpoint that counts them: the stream's
+  // bookkeeping and every class's core; then the logs rewritten after a table rebuild take their
+  // place, and the history and posterior.json follow.
+  cores_.write_logs();
   io::write_file_atomically(path_in(options_.state_dir, "checkpoint.bin"), [&](std::ostream& os) {
     BinaryWriter out(os);
     out.value(kStreamMagic);
@@ -216,50 +146,70 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
     out.value<std::uint64_t>(seq_ + 1);
     out.value<std::uint64_t>(lines_consumed);
     out.value<std::uint64_t>(rejects_bytes_);
-    out.value<std::uint8_t>(smc_->splits_state() ? 1 : 0);
-    out.value<std::uint64_t>(trucks_written_);
-    out.value<std::uint64_t>(trucks_bytes_);
-    out.value<std::int32_t>(trucks_generation_);
-    smc_->save_state(out);
+    out.value<std::uint8_t>(cores_.splits_state() ? 1 : 0);
+    cores_.save(out);
     out.seal();
     checkpoint_checksum_ = out.last_seal();
   });
   ++seq_;
-  if (rewrote_log) {
-    std::error_code ec;
-    fs::rename(log + ".next", log, ec);
-    if (ec) throw IoError("stream: cannot rename '" + log + ".next' to '" + log + "': " + ec.message());
-  }
+  cores_.commit_logs();
   write_history_and_posterior(source, lines_consumed);
 }
 
 void WimStream::write_history_and_posterior(const std::string& source, std::size_t lines_consumed) {
-  const fleet::PosteriorCloud cloud = smc_->cloud();
+  const fleet::ClassPosteriors classes = cores_.posteriors();
   const HistoryRowsInput row{.seq = seq_, .source = source, .lines_consumed = lines_consumed,
-                             .ess = smc_->sampler().ess(), .checkpoint_checksum = checkpoint_checksum_};
-  history_->append(history_rows(cloud, site_, options_.history_prediction, row));
-  io::write_posterior_file(path_in(options_.state_dir, "posterior.json"), cloud, fleet::summarise_cloud(cloud),
-                           fleet::summarise_psi(cloud));
+                             .checkpoint_checksum = checkpoint_checksum_};
+  history_->append(history_rows(classes, site_, options_.history_prediction, row));
+  write_posterior(classes);
+}
+
+void WimStream::write_posterior(const fleet::ClassPosteriors& classes) const {
+  std::vector<std::vector<fleet::ParameterSummary>> hyper, psi;
+  for (const auto& c : classes) {
+    hyper.push_back(fleet::summarise_cloud(c.cloud));
+    psi.push_back(fleet::summarise_psi(c.cloud));
+  }
+  io::write_posterior_classes_file(path_in(options_.state_dir, "posterior.json"), classes, hyper, psi);
 }
 
 void WimStream::report() const {
-  if (smc_->trucks_seen() == 0) return;
-  const auto prediction = predict::predict_ssr(smc_->cloud(), site_, {}, options_.prediction);
-  reports_ << "# SSR prediction after " << smc_->trucks_seen() << " trucks\n";
+  if (cores_.trucks_seen() == 0) return;
+  // With classes: the mixture at the observed traffic shares (predict_ssr_mixture; one
+  // unlabelled class is predict_ssr itself).
+  const fleet::ClassPosteriors classes = cores_.posteriors();
+  const auto prediction =
+      predict::predict_ssr_mixture(classes, fleet::observed_shares(classes), site_, {}, options_.prediction);
+  reports_ << "# SSR prediction after " << cores_.trucks_seen() << " trucks";
+  if (cores_.labelled()) reports_ << " (classes " << cores_.labels() << " at their observed shares)";
+  reports_ << "\n";
   predict::write_prediction_csv(reports_, prediction);
   reports_.flush();
 }
 
 StreamCounts WimStream::run(std::istream& in, const std::string& source, const std::atomic<bool>& stop) {
-  io::WimLogReader reader(in, source, site_.options().unsprung_mass_kg);
+  io::WimLogReader reader(in, source, site_.options().unsprung_mass_kg, options_.limits);
   if (reader.sensors() != site_.sensors()) {
     throw DataError(source, 1, "if_" + std::to_string(reader.sensors()),
                     "the input has " + std::to_string(reader.sensors()) + " sensors but the site has " +
                         std::to_string(site_.sensors()));
   }
+  // Vehicle classes: a state holds labelled classes or one unlabelled posterior, never both.
+  if (!cores_.empty() && cores_.labelled() != reader.has_classes()) {
+    throw DataError(source, 1, "class",
+                    cores_.labelled() ? "the input has no class column, but the state holds classes " + cores_.labels()
+                                      : std::string("the input has a class column, but the state's posterior has no "
+                                                    "classes (replay into a new state directory)"));
+  }
+  if (!resumed_) cores_.set_fixed(options_.classes);
+  if (!cores_.fixed().empty() && !reader.has_classes()) {
+    throw DataError(source, 1, "class", "the state's classes are fixed (--classes), but the input has no class column");
+  }
+  reader.set_classes(cores_.fixed());
   reader.set_follow(options_.follow);
   const bool same_source = resumed_ && source == checkpoint_source_;
-  const std::unordered_set<std::string> absorbed_before(smc_->truck_ids().begin(), smc_->truck_ids().end());
+  const std::vector<std::string> ids_before = cores_.truck_ids();
+  const std::unordered_set<std::string> absorbed_before(ids_before.begin(), ids_before.end());
 
   const std::string rejects_path = path_in(options_.state_dir, "rejects.csv");
   std::ofstream rejects(rejects_path, std::ios::app | std::ios::binary);
@@ -298,21 +248,23 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
       ++counts.skipped;
       continue;
     }
-    const auto& stage = smc_->absorb(record);
+    fleet::OnlineFit& core = cores_.core(record.vehicle_class);
+    const auto& stage = core.absorb(record);
     ++counts.absorbed;
     save_state(source, line);
     if (progress_) {
-      *progress_ << "stream: truck " << smc_->trucks_seen() << " " << record.truck_id << " (line " << line << "): "
-                 << stage.steps.size() << " steps, ESS " << std::fixed << std::setprecision(0) << smc_->sampler().ess()
+      *progress_ << "stream: truck " << cores_.trucks_seen() << " " << record.truck_id << " (line " << line << ")"
+                 << (record.vehicle_class.empty() ? "" : " class " + record.vehicle_class) << ": "
+                 << stage.steps.size() << " steps, ESS " << std::fixed << std::setprecision(0) << core.sampler().ess()
                  << ", " << std::setprecision(3) << stage.wall_time_s << " s";
-      const std::string note = smc_->note();
+      const std::string note = core.note();
       *progress_ << (note.empty() ? "" : "; ") << note << "\n";
       progress_->unsetf(std::ios::floatfield);
     }
-    if (options_.report_every > 0 && smc_->trucks_seen() % options_.report_every == 0) report();
+    if (options_.report_every > 0 && cores_.trucks_seen() % options_.report_every == 0) report();
   }
   report();
-  counts.total_absorbed = smc_->trucks_seen();
+  counts.total_absorbed = cores_.trucks_seen();
   return counts;
 }
 

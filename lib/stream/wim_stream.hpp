@@ -3,24 +3,26 @@
 // always holds a consistent posterior and a checkpoint to resume from.
 //
 // State directory:
-//   checkpoint.bin   the stream's bookkeeping (with the checkpoint's sequence number), then the
-//                    core's state; rewritten atomically after every absorbed truck. Its size does
-//                    not grow with the trucks absorbed on the default (marginal) core: their
-//                    records are in trucks.bin
+//   checkpoint.bin   the stream's bookkeeping (with the checkpoint's sequence number), then each
+//                    class's core state; rewritten atomically after every absorbed truck. Its size
+//                    does not grow with the trucks absorbed on the default (marginal) core: their
+//                    records are in the truck logs
 //   trucks.bin       the marginal core's truck records (id, data, fit, table) after a header naming
-//                    the tables' generation; appended and synced before the checkpoint that counts
-//                    them. A crash between the append and the checkpoint leaves a tail that the
-//                    resume cuts off. After a table rebuild (a few times per doubling of the early
-//                    stream, none later) the whole log is written to trucks.bin.next, the
-//                    checkpoint naming the new generation follows, and only then does the rename
-//                    replace trucks.bin, so the log on disk always matches the checkpoint (a resume
-//                    finishes or discards a rename that a crash or a full disk interrupted)
+//                    the tables' generation; with vehicle classes one log per class,
+//                    trucks.LABEL.bin (stream/class_cores.hpp). Appended and synced before the
+//                    checkpoint that counts them: a crash between the append and the checkpoint
+//                    leaves a tail that the resume cuts off. After a table rebuild (a few times per
+//                    doubling of the early stream, none later) the whole log is written to
+//                    trucks.bin.next, the checkpoint naming the new generation follows, and only then
+//                    does the rename replace trucks.bin, so the log on disk always matches the
+//                    checkpoint (a resume finishes or discards a rename that a crash or a full disk
+//                    interrupted)
 //   history.sqlite   every checkpoint's report (hyperparameter summaries, an SSR prediction), in
 //                    SQLite (io/history_db.hpp), written after the checkpoint's rename and naming its
 //                    sequence number and checksum; a resume adds the one row set a failure between
 //                    the two can leave missing, and refuses a history that disagrees
-//   posterior.json   the posterior file `predict --posterior DIR` reads; rewritten atomically after
-//                    every checkpoint and on resume
+//   posterior.json   the posterior file `predict --posterior DIR` reads (a posterior per class when
+//                    the input has a class column); rewritten atomically after every checkpoint
 //   rejects.csv      every rejected record verbatim, each after a '# line N: reason' comment, under
 //                    a copy of the input's header, so it is itself a WIM log to fix and replay
 //   lock             flock(2)ed by the running stream, holding its process id (state_lock.hpp):
@@ -43,11 +45,14 @@
 #include <string>
 
 #include <memory>
+#include <set>
 
 #include "fleet/online_fit.hpp"
+#include "io/history_db.hpp"
+#include "io/wim_log.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/site.hpp"
-#include "io/history_db.hpp"
+#include "stream/class_cores.hpp"
 #include "stream/state_lock.hpp"
 #include "util/binary_io.hpp"
 
@@ -62,8 +67,13 @@ struct StreamOptions {
   // effects (model_spec.hpp; on the latent core), recorded in the state by name.
   fleet::OnlineFitOptions fit;
   predict::PredictionOptions prediction;
+  // Vehicle classes: when not empty, the only classes a new state accepts (a record of another is
+  // quarantined, field `class`); a resumed state keeps the list it was made with (another list is
+  // refused). Empty: a new label starts a new class. limits.fhwa_classes: labels must be 1..13.
+  std::set<std::string> classes;
+  io::WimLimits limits;
   // The prediction each checkpoint's history row set holds: lighter than a report's, since it runs
-  // after every truck (about 2,000 passes; history_rows.hpp).
+  // after every truck (about 2,000 passes per class; history_rows.hpp).
   predict::PredictionOptions history_prediction{.theta_draws = 50, .trucks_per_draw = 40};
 };
 
@@ -83,7 +93,7 @@ class WimStream {
 
   bool resumed() const { return resumed_; }
   // What the user should know about the posterior's quality (fleet::OnlineFit::warning), "" if nothing.
-  std::string warning() const { return smc_->warning(); }
+  std::string warning() const { return cores_.warning(); }
 
   // Reads records from `in` until its end (or, following, until `stop` is set). `source` names
   // the input in messages and in the checkpoint (a resume skips by line only on the same source).
@@ -96,17 +106,17 @@ class WimStream {
     return options_.fit.latent.extension != nullptr ? options_.fit.latent.extension->name() : "base";
   }
   void restore_checkpoint(const std::string& checkpoint);
-  void restore_truck_log(BinaryReader& checkpoint);
   bool open_history();
   void save_state(const std::string& source, std::size_t lines_consumed);
   void write_history_and_posterior(const std::string& source, std::size_t lines_consumed);
+  void write_posterior(const fleet::ClassPosteriors& classes) const;
   void report() const;
 
   const site::Site& site_;
   StreamOptions options_;
   std::ostream* progress_;
   std::ostream& reports_;
-  std::unique_ptr<fleet::OnlineFit> smc_;
+  ClassCores cores_;  // a fleet posterior per vehicle class (one, unlabelled, without a class column)
   bool resumed_ = false;
   // Bookkeeping restored from the checkpoint.
   std::string checkpoint_source_;
@@ -115,10 +125,6 @@ class WimStream {
   std::uint64_t seq_ = 0;                  // checkpoints written into this state, over all runs
   std::uint64_t checkpoint_checksum_ = 0;  // the seal of checkpoint number seq_
   std::unique_ptr<io::HistoryDb> history_;
-  // The truck log (marginal core): records written, its length, and the table generation they hold.
-  std::uint64_t trucks_written_ = 0;
-  std::uint64_t trucks_bytes_ = 0;
-  int trucks_generation_ = -1;
 };
 
 }  // namespace ssrfleet::stream
