@@ -1,6 +1,7 @@
 // ssrfleet simulate: a fleet (drawn from distributions, or an explicit truck list) over a road,
 // written as a WIM log.
 #include <algorithm>
+#include <charconv>
 #include <cctype>
 #include <iostream>
 #include <string>
@@ -36,6 +37,10 @@ std::vector<records::ForceRecord> to_force_records(const std::vector<records::Wi
   }
   return out;
 }
+
+// The most trucks simulate draws (README "Input limits"): the log of 10 million trucks is about 3 GB
+// in memory while it is written.
+constexpr long kMaxSimulatedTrucks = 10'000'000;
 
 bool is_count(const std::string& s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
@@ -96,12 +101,20 @@ int run_simulate(int argc, const char* const argv[]) {
   if (!(noise >= 0.0)) throw UsageError("--noise " + std::to_string(noise) + ": must be >= 0");
   if (no_sprung_mass && !forces) throw UsageError("--no-sprung-mass needs --forces (an IF log needs the mass that normalises it)");
 
+  // A count is checked before anything is built (the road takes a while), so an absurd one fails at once.
+  long count = 0;
+  if (is_count(trucks_arg)) {
+    unsigned long long n = 0;  // digits only (is_count); from_chars reports a number past 2^64 as out of range
+    const auto [end, ec] = std::from_chars(trucks_arg.data(), trucks_arg.data() + trucks_arg.size(), n);
+    if (ec != std::errc() || n < 1 || n > static_cast<unsigned long long>(kMaxSimulatedTrucks)) {
+      throw UsageError("--trucks " + trucks_arg + ": must be between 1 and " + std::to_string(kMaxSimulatedTrucks));
+    }
+    count = static_cast<long>(n);
+  }
   const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   std::vector<records::Truck> trucks;
-  if (is_count(trucks_arg)) {
-    const long n = std::stol(trucks_arg);
-    if (n < 1 || n > 10'000'000) throw UsageError("--trucks " + trucks_arg + ": must be between 1 and 10000000");
-    trucks = fleet::draw_fleet(dist, static_cast<int>(n), site.lateral_min_m(), site.lateral_max_m(), seed);
+  if (count > 0) {
+    trucks = fleet::draw_fleet(dist, static_cast<int>(count), site.lateral_min_m(), site.lateral_max_m(), seed);
   } else {
     trucks = io::read_truck_list_file(trucks_arg, site.lateral_min_m(), site.lateral_max_m());
   }

@@ -106,6 +106,10 @@ fleet::PosteriorCloud read_posterior_file(const std::string& path_in) {
   if (std::filesystem::is_directory(path)) path = (std::filesystem::path(path) / "posterior.json").string();
   std::ifstream in(path);
   if (!in) throw MissingInputError("cannot open posterior file '" + path + "'");
+  return read_posterior(in, path);
+}
+
+fleet::PosteriorCloud read_posterior(std::istream& in, const std::string& path) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(in);

@@ -4,6 +4,7 @@
 // summary is computed by fleet::summarise_cloud (fleet/posterior_summary.hpp).
 #pragma once
 
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,8 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& cloud,
 // directory). Any missing or malformed field is a DataError naming the file and the field; a
 // missing file is a MissingInputError.
 fleet::PosteriorCloud read_posterior_file(const std::string& path);
+// The same from a stream; `source` names it in messages.
+fleet::PosteriorCloud read_posterior(std::istream& in, const std::string& source);
 
 void write_posterior_file(const std::string& path, const fleet::PosteriorCloud& cloud,
                           const std::vector<fleet::ParameterSummary>& hyper,

@@ -2,6 +2,7 @@
 // truck_id,speed_mps,sprung_mass_kg,k_npm,kt_npm,z_m ('#' comments, extra columns ignored).
 #pragma once
 
+#include <istream>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -15,6 +16,9 @@ namespace ssrfleet::io {
 // road surface). Any failure is a DataError naming file, line and field.
 std::vector<records::Truck> read_truck_list_file(const std::string& path, double lateral_min_m,
                                                double lateral_max_m);
+// The same from a stream; `source` names it in messages.
+std::vector<records::Truck> read_truck_list(std::istream& in, const std::string& source, double lateral_min_m,
+                                          double lateral_max_m);
 
 // Writes trucks in the same format at full precision.
 void write_truck_list(std::ostream& out, const std::vector<records::Truck>& trucks);
