@@ -13,15 +13,20 @@ name=$(basename "$fuzzer" _fuzzer)
 rm -rf "$work"
 mkdir -p "$work/corpus" "$work/artifacts"
 cp -r "$seeds"/. "$work/corpus/"
+# Inputs up to 64 KiB, or the largest seed (a stream state holds whole truck tables).
+max_len=$(find "$seeds" -type f -printf '%s\n' | sort -n | tail -1)
+(( max_len < 65536 )) && max_len=65536
 status=0
+start=$SECONDS
 "$fuzzer" "$work/corpus" -max_total_time="$seconds" -print_final_stats=1 -timeout=10 \
-  -malloc_limit_mb=1024 -rss_limit_mb=2048 -max_len=65536 -artifact_prefix="$work/artifacts/" \
+  -malloc_limit_mb=1024 -rss_limit_mb=2048 -max_len="$max_len" -artifact_prefix="$work/artifacts/" \
   >"$work/log.txt" 2>&1 || status=$?
+took=$((SECONDS - start))
 stat() { grep -E "^stat::$1:" "$work/log.txt" | tail -1 | awk '{print $2}'; }
 cov=$(grep -E '#[0-9]+.*cov: ' "$work/log.txt" | tail -1 | sed -E 's/.*cov: ([0-9]+).*/\1/' || true)
 ft=$(grep -E '#[0-9]+.*ft: ' "$work/log.txt" | tail -1 | sed -E 's/.*ft: ([0-9]+).*/\1/' || true)
 crashes=$(find "$work/artifacts" -type f | wc -l)
-echo "$name: $(stat number_of_executed_units) execs in ${seconds} s, cov ${cov:-?}, ft ${ft:-?}," \
+echo "$name: $(stat number_of_executed_units) execs in ${took} s, cov ${cov:-?}, ft ${ft:-?}," \
      "corpus $(find "$work/corpus" -type f | wc -l) inputs, crashes $crashes (log $work/log.txt)"
 if [[ $crashes -gt 0 || $status -ne 0 ]]; then
   find "$work/artifacts" -type f | sed 's/^/  artifact: /'

@@ -18,7 +18,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::expect_clean("", [&] {
     cli::SiteFlags flags;
     flags.sensors = sensors;
-    flags.to_options();
+    // The positions are what a site builds first: an accepted count must not be an absurd allocation.
+    flags.to_options().sensors.positions_m();
   });
   fuzz::expect_clean("", [&] { cli::parse_positions(positions); });
   fuzz::expect_clean("", [&] { cli::parse_seed(seed); });

@@ -162,7 +162,7 @@ TEST_CASE("an OpenCRG header declaring 1e12 points is refused within a second", 
   CHECK(seconds_since(start) < 1.0);
 }
 
-TEST_CASE("ssrfleet refuses a billion trucks or particles within a second", "[cli][limits]") {
+TEST_CASE("ssrfleet refuses a billion trucks, sensors or particles within a second", "[cli][limits]") {
   test::TempDir dir;
   auto start = std::chrono::steady_clock::now();
   auto r = test::run_ssrfleet("simulate --trucks 1000000000 --out '" + dir.file("log.csv") + "'", dir);
@@ -173,6 +173,13 @@ TEST_CASE("ssrfleet refuses a billion trucks or particles within a second", "[cl
   r = test::run_ssrfleet("simulate --trucks 99999999999999999999999 --out '" + dir.file("log.csv") + "'", dir);
   CHECK(r.status == 64);
   CHECK_THAT(r.err, Catch::Contains("must be between 1 and 10000000"));
+
+  // A billion sensors: 8 GB of positions before anything looked at them.
+  start = std::chrono::steady_clock::now();
+  r = test::run_ssrfleet("simulate --trucks 1 --sensors 76,0.0000001,1000000000 --out '" + dir.file("log.csv") + "'", dir);
+  CHECK(seconds_since(start) < 1.0);
+  CHECK(r.status == 64);
+  CHECK_THAT(r.err, Catch::Contains("sensors: count is 1000000000, but must be at most 10000"));
 
   start = std::chrono::steady_clock::now();
   r = test::run_ssrfleet("stream --particles 1000000000 --state '" + dir.file("state") + "'", dir);

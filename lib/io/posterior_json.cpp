@@ -1,9 +1,12 @@
 #include "io/posterior_json.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
+#include <type_traits>
 
 #include "io/atomic_file.hpp"
 #include "model/fleet_model.hpp"
@@ -85,10 +88,26 @@ namespace {
 template <class T>
 T get_field(const nlohmann::json& j, const char* key, const std::string& file, const std::string& where) {
   if (!j.is_object() || !j.contains(key)) throw DataError(file, 0, where + key, "missing");
-  try {
-    return j.at(key).get<T>();
-  } catch (const nlohmann::json::exception&) {
-    throw DataError(file, 0, where + key, "has the wrong type");
+  const nlohmann::json& v = j.at(key);
+  if constexpr (std::is_integral_v<T>) {
+    // nlohmann converts any number to an integer by a plain cast, undefined behaviour for 1e300
+    // (UBSan, found by fuzz/posterior_json_fuzzer): take whole numbers in T's range only.
+    const bool fits = v.is_number_unsigned()
+                          ? v.get<std::uint64_t>() <= static_cast<std::uint64_t>(std::numeric_limits<T>::max())
+                          : v.is_number_integer() && v.get<std::int64_t>() >= std::numeric_limits<T>::min() &&
+                                v.get<std::int64_t>() <= std::numeric_limits<T>::max();
+    if (!fits) {
+      throw DataError(file, 0, where + key,
+                      "must be a whole number from " + std::to_string(std::numeric_limits<T>::min()) + " to " +
+                          std::to_string(std::numeric_limits<T>::max()) + ", found " + v.dump());
+    }
+    return v.is_number_unsigned() ? static_cast<T>(v.get<std::uint64_t>()) : static_cast<T>(v.get<std::int64_t>());
+  } else {
+    try {
+      return v.get<T>();
+    } catch (const nlohmann::json::exception&) {
+      throw DataError(file, 0, where + key, "has the wrong type");
+    }
   }
 }
 
@@ -113,7 +132,9 @@ fleet::PosteriorCloud read_posterior(std::istream& in, const std::string& path) 
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {
+    // parse_error, and out_of_range for a number past a double ("2e4000", found by
+    // fuzz/posterior_json_fuzzer: it escaped as an internal error).
     throw DataError(path, 0, "json", std::string("not valid JSON (") + e.what() + ")");
   }
   fleet::PosteriorCloud c;
