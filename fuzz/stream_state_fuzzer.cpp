@@ -102,6 +102,12 @@ void write_bytes(const std::string& path, std::string_view bytes) {
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int* /*argc*/, char*** /*argv*/) {
+  state_dir();
+  // Registered after the directory's name is made, so it runs before that string is destroyed.
+  std::atexit([] {
+    std::error_code ignored;
+    fs::remove_all(state_dir(), ignored);
+  });
   if (const char* out = std::getenv("SSRFLEET_FUZZ_MAKE_SEEDS")) make_seeds(out);
   return 0;
 }

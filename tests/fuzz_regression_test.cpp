@@ -50,3 +50,25 @@ TEST_CASE("a posterior file's integer fields take whole numbers in range only", 
   REQUIRE(e);
   CHECK(e->field() == "site.sensors");
 }
+
+TEST_CASE("--positions FIRST:STEP:LAST past a long, or not finite, is a usage error", "[cli][fuzz]") {
+  // site_options_fuzzer, crash-8d93e652: --positions "13:0.05:7.697e51" (written out in digits) asked for 1.5e53 positions, and
+  // static_cast<long> of that is undefined behaviour (UBSan: "1.5394e+53 is outside the range of
+  // representable values of type 'long'"); in a plain build it came out negative and predict
+  // silently used the default positions.
+  test::TempDir dir;
+  const std::string posterior = dir.file("posterior.json");
+  test::write_text(posterior,
+                   R"({"trucks_seen": 3, "particles": 2, "ess": 1.9, "method": "smc", "model": "base", "format_version": 1,
+  "site": {"fingerprint": "f", "road": "AS1", "sensors": 16, "lateral_min_m": 0.0, "lateral_max_m": 5.0},
+  "cloud": {"weights": [0.5, 0.5], "speed_mps": [23.1, 21.0], "sprung_mass_kg": [4450, 4300],
+            "theta": [[5e5, 5e4, 1.95e6, 1.95e5, 1.5, 0.5, 0.02], [5.05e5, 5.05e4, 1.97e6, 1.97e5, 1.52, 0.51, 0.021]]}})");
+  for (const char* positions : {"13:0.05:7697000000000000000000000000000000000000000000000000", "0:1e-300:1", "nan:1:2"}) {
+    INFO(positions);
+    const auto r = test::run_ssrfleet("predict --posterior '" + posterior + "' --new-road --quiet --positions '" +
+                                          positions + "'",
+                                      dir);
+    CHECK(r.status == 64);
+    CHECK_THAT(r.err, Catch::Contains(std::string("--positions '") + positions + "'"));
+  }
+}
