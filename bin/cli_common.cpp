@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "io/atomic_file.hpp"
+#include "smc/engine.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::cli {
@@ -71,6 +72,13 @@ bool parse_or_help(int argc, const char* const argv[], const po::options_descrip
     throw UsageError(std::string(e.what()) + " (see --help)");
   }
   return true;
+}
+
+void check_particles(long particles) {
+  const long most = smc::TemperedSampler::kMaxParticles;
+  if (particles < 2 || particles > most) {
+    throw UsageError("--particles " + std::to_string(particles) + ": must be between 2 and " + std::to_string(most));
+  }
 }
 
 std::uint64_t parse_seed(const std::string& text, const std::string& option) {

@@ -51,7 +51,7 @@ TEST_CASE("a posterior file's integer fields take whole numbers in range only", 
   CHECK(e->field() == "site.sensors");
 }
 
-TEST_CASE("--positions FIRST:STEP:LAST past a long, or not finite, is a usage error", "[cli][fuzz]") {
+TEST_CASE("a positions range FIRST:STEP:LAST past a long or not finite is a usage error", "[cli][fuzz]") {
   // site_options_fuzzer, crash-8d93e652: --positions "13:0.05:7.697e51" (written out in digits) asked for 1.5e53 positions, and
   // static_cast<long> of that is undefined behaviour (UBSan: "1.5394e+53 is outside the range of
   // representable values of type 'long'"); in a plain build it came out negative and predict

@@ -185,5 +185,5 @@ TEST_CASE("ssrfleet refuses a billion trucks, sensors or particles within a seco
   r = test::run_ssrfleet("stream --particles 1000000000 --state '" + dir.file("state") + "'", dir);
   CHECK(seconds_since(start) < 1.0);
   CHECK(r.status == 64);
-  CHECK_THAT(r.err, Catch::Contains("particles must be <= 10000000"));
+  CHECK_THAT(r.err, Catch::Contains("--particles 1000000000: must be between 2 and 10000000"));
 }
