@@ -19,7 +19,9 @@ CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DSSRFLEET_FUZZ=ON -DCMAKE_BUI
   -DSSRFLEET_BUILD_TESTS=OFF -DSSRFLEET_BUILD_BENCHMARKS=OFF >/dev/null
 names=("$@")
 if [[ ${#names[@]} -eq 0 ]]; then
-  names=($(sed -n '/^set(SSRFLEET_FUZZERS/,/)/p' "$root/fuzz/CMakeLists.txt" | sed -E 's/#.*//; s/set\(SSRFLEET_FUZZERS//; s/\)//' | tr -s ' \n' ' '))
+  # The list in fuzz/CMakeLists.txt, comments dropped first (they hold parentheses too).
+  names=($(sed -E 's/#.*//' "$root/fuzz/CMakeLists.txt" | sed -n '/^set(SSRFLEET_FUZZERS/,/)/p' |
+    sed -E 's/set\(SSRFLEET_FUZZERS//; s/\)//' | tr -s ' \n' ' '))
 fi
 targets=()
 for n in "${names[@]}"; do targets+=("${n}_fuzzer"); done
