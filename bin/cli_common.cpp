@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "io/atomic_file.hpp"
+#include "smc/engine.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::cli {
@@ -73,6 +74,13 @@ bool parse_or_help(int argc, const char* const argv[], const po::options_descrip
   return true;
 }
 
+void check_particles(long particles) {
+  const long most = smc::TemperedSampler::kMaxParticles;
+  if (particles < 2 || particles > most) {
+    throw UsageError("--particles " + std::to_string(particles) + ": must be between 2 and " + std::to_string(most));
+  }
+}
+
 std::uint64_t parse_seed(const std::string& text, const std::string& option) {
   std::uint64_t value = 0;
   const char* end = text.data() + text.size();
@@ -113,10 +121,10 @@ std::vector<double> parse_positions(const std::string& text) {
     try {
       std::size_t used = 0;
       const double v = std::stod(s, &used);
-      if (used != s.size()) throw std::invalid_argument(s);
+      if (used != s.size() || !std::isfinite(v)) throw std::invalid_argument(s);  // stod takes "nan", "inf"
       return v;
     } catch (const std::logic_error&) {
-      throw UsageError("--positions '" + text + "': '" + s + "' is not a number");
+      throw UsageError("--positions '" + text + "': '" + s + "' is not a finite number");
     }
   };
   if (text.find(':') != std::string::npos) {
@@ -127,8 +135,11 @@ std::vector<double> parse_positions(const std::string& text) {
     }
     const double first = number(a), step = number(b), last = number(c);
     if (!(step > 0.0) || last < first) throw UsageError("--positions '" + text + "': need STEP > 0 and LAST >= FIRST");
-    const auto n = static_cast<long>(std::floor((last - first) / step + 1e-9)) + 1;
-    if (n > 1'000'000) throw UsageError("--positions '" + text + "': more than a million positions");
+    // The count is checked as a double: 13:0.05:7e54 is 1.5e56 positions, past a long (casting it was
+    // undefined behaviour, found by fuzz/site_options_fuzzer).
+    const double count = std::floor((last - first) / step + 1e-9) + 1.0;
+    if (!(count <= 1e6)) throw UsageError("--positions '" + text + "': more than a million positions");
+    const auto n = static_cast<long>(count);
     for (long i = 0; i < n; ++i) p.push_back(first + static_cast<double>(i) * step);
     return p;
   }

@@ -39,6 +39,10 @@ bool parse_or_help(int argc, const char* const argv[], const po::options_descrip
 // where program_options' own conversion prints "0.29999999999999999").
 std::string shortest_text(double value);
 
+// --particles P: UsageError unless 2 <= P <= smc::TemperedSampler::kMaxParticles (1e7),
+// checked before the road is built so that an absurd count fails at once (README "Input limits").
+void check_particles(long particles);
+
 // Parses a seed: a whole number in [0, 2^64). Anything else is a UsageError naming the option.
 std::uint64_t parse_seed(const std::string& text, const std::string& option = "--seed");
 

@@ -62,6 +62,7 @@ int run_diagnose(int argc, const char* const argv[]) {
                      "usage: ssrfleet diagnose LOG [--road AS1|FILE] [--json report.json] [--out DIR] [--particles P]")) {
     return 0;
   }
+  check_particles(o.particles);
   o.seed = parse_seed(seed_text);
   if (threads < 0) throw UsageError("--threads must be >= 0");
   o.threads = threads > 0 ? threads : smc::TemperedSampler::Options::default_threads();

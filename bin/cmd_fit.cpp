@@ -44,6 +44,7 @@ int run_fit(int argc, const char* const argv[]) {
                      "usage: ssrfleet fit LOG [--road AS1|FILE] [--model SPEC] [--out posterior.json] [--particles P] [--seed K]")) {
     return 0;
   }
+  check_particles(fit.particles);
   fit.final_sweeps_given = !vm["final-sweeps"].defaulted();
   fit.max_sweeps_given = !vm["max-sweeps"].defaulted();
   fit.core_given = !vm["core"].defaulted();

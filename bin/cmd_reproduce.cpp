@@ -37,6 +37,7 @@ int run_reproduce(int argc, const char* const argv[]) {
                      "usage: ssrfleet reproduce [--out DIR] [--seed K] [--trucks 100] [--particles 1024] [--noise 0.02]")) {
     return 0;
   }
+  check_particles(o.particles);
   o.seed = parse_seed(seed_text);
   o.plots = !no_plots;
   o.progress = quiet ? nullptr : &std::cerr;

@@ -1,6 +1,7 @@
 // ssrfleet simulate: a fleet (drawn from distributions, or an explicit truck list) over a road,
 // written as a WIM log.
 #include <algorithm>
+#include <charconv>
 #include <cctype>
 #include <iostream>
 #include <sstream>
@@ -38,6 +39,10 @@ std::vector<records::ForceRecord> to_force_records(const std::vector<records::Wi
   }
   return out;
 }
+
+// The most trucks simulate draws (README "Input limits"): the log of 10 million trucks is about 3 GB
+// in memory while it is written.
+constexpr long kMaxSimulatedTrucks = 10'000'000;
 
 // --fleet-mix "A:share=0.6,k-mean=400e3;B:share=0.4": each class's share (required) and the
 // fleet parameters it changes from `base` (the command's own --k-mean, ...), named as those options.
@@ -155,15 +160,23 @@ int run_simulate(int argc, const char* const argv[]) {
   if (!(noise >= 0.0)) throw UsageError("--noise " + std::to_string(noise) + ": must be >= 0");
   if (no_sprung_mass && !forces) throw UsageError("--no-sprung-mass needs --forces (an IF log needs the mass that normalises it)");
 
+  // A count is checked before anything is built (the road takes a while), so an absurd one fails at once.
+  long count = 0;
+  if (is_count(trucks_arg)) {
+    unsigned long long n = 0;  // digits only (is_count); from_chars reports a number past 2^64 as out of range
+    const auto [end, ec] = std::from_chars(trucks_arg.data(), trucks_arg.data() + trucks_arg.size(), n);
+    if (ec != std::errc() || n < 1 || n > static_cast<unsigned long long>(kMaxSimulatedTrucks)) {
+      throw UsageError("--trucks " + trucks_arg + ": must be between 1 and " + std::to_string(kMaxSimulatedTrucks));
+    }
+    count = static_cast<long>(n);
+  }
   const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   std::vector<records::Truck> trucks;
-  if (is_count(trucks_arg)) {
-    const long n = std::stol(trucks_arg);
-    if (n < 1 || n > 10'000'000) throw UsageError("--trucks " + trucks_arg + ": must be between 1 and 10000000");
+  if (count > 0) {
     trucks = fleet_mix.empty()
-                 ? fleet::draw_fleet(dist, static_cast<int>(n), site.lateral_min_m(), site.lateral_max_m(), seed)
-                 : fleet::draw_class_fleet(parse_fleet_mix(fleet_mix, dist), static_cast<int>(n), site.lateral_min_m(),
-                                           site.lateral_max_m(), seed);
+                 ? fleet::draw_fleet(dist, static_cast<int>(count), site.lateral_min_m(), site.lateral_max_m(), seed)
+                 : fleet::draw_class_fleet(parse_fleet_mix(fleet_mix, dist), static_cast<int>(count),
+                                           site.lateral_min_m(), site.lateral_max_m(), seed);
   } else {
     if (!fleet_mix.empty()) throw UsageError("--fleet-mix draws the trucks: give --trucks N (a truck list may carry a class column instead)");
     trucks = io::read_truck_list_file(trucks_arg, site.lateral_min_m(), site.lateral_max_m());

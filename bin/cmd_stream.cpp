@@ -72,6 +72,7 @@ int run_stream(int argc, const char* const argv[]) {
                      "usage: ssrfleet stream --state DIR [--road AS1|FILE] [--input FILE] [--follow] [--report-every N]")) {
     return 0;
   }
+  check_particles(particles);
   if (options.fit.latent.window < 0) throw UsageError("--window must be >= 0");
   if (options.fit.latent.window > 0) options.fit.core = fleet::OnlineFitOptions::Core::kLatent;
   // The core is chosen before the sampler options go to it (sampler() is the chosen core's).

@@ -87,8 +87,9 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   observed_if_.clear();
   fits_.clear();
   sum_log_sd_k_ = sum_log_sd_kt_ = 0.0;
+  // Nothing is sized by n: it is not checked (its seal comes after the truck records), and up to 1e8
+  // it would reserve 2 GB for a state of a few bytes. The store grows as records are read.
   store_ = model::TableStore{};
-  store_.reserve(static_cast<std::size_t>(n), 0);
   marginal_ = model::FleetMarginal(site_.sensors(), lateral_, settings_.lattice);
   mode_ = Mode::kIdle;
   old_store_.reset();

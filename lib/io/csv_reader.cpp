@@ -1,10 +1,14 @@
 #include "io/csv_reader.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <string_view>
+#include <unordered_map>
 
 #include "util/errors.hpp"
+#include "util/line_reader.hpp"
 
 namespace ssrfleet::io {
 
@@ -43,8 +47,17 @@ CsvReader::CsvReader(std::istream& in, std::string source_name)
 
 bool CsvReader::next(CsvRow& row) {
   std::string line;
-  while (std::getline(in_, line)) {
-    if (in_.eof() && follow_) {  // no newline yet: the writer is mid-record
+  for (;;) {
+    // A held-back partial line counts towards the limit of the line it begins.
+    const LineRead got = read_bounded_line(in_, line, kMaxCsvLineBytes - std::min(partial_.size(), kMaxCsvLineBytes));
+    if (got == LineRead::end) return false;
+    if (got == LineRead::too_long) {
+      throw DataError(source_name_, line_ + 1, "line",
+                      "the line is longer than " + std::to_string(kMaxCsvLineBytes) +
+                          " bytes (1 MiB), the most a CSV line may hold; not read further (is this a CSV file, "
+                          "with its line ends?)");
+    }
+    if (got == LineRead::no_newline && follow_) {  // no newline yet: the writer is mid-record
       partial_ += line;
       return false;
     }
@@ -55,12 +68,17 @@ bool CsvReader::next(CsvRow& row) {
     ++line_;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (is_skippable(line)) continue;
+    const auto commas = static_cast<std::size_t>(std::count(line.begin(), line.end(), ','));
+    if (commas >= kMaxCsvColumns) {
+      throw DataError(source_name_, line_, "columns",
+                      "the line has " + std::to_string(commas + 1) + " fields, more than the " +
+                          std::to_string(kMaxCsvColumns) + " a CSV line may hold");
+    }
     row.line = line_;
     row.fields = split_csv_line(line);
     row.raw = std::move(line);
     return true;
   }
-  return false;
 }
 
 double parse_finite(const std::string& text, const std::string& source, std::size_t line,
@@ -84,6 +102,17 @@ long column_index(const std::vector<std::string>& header, const std::string& nam
     if (header[i] == name) return static_cast<long>(i);
   }
   return -1;
+}
+
+std::vector<long> numbered_columns(const std::vector<std::string>& header, const std::string& prefix) {
+  std::unordered_map<std::string_view, long> index;
+  for (std::size_t i = 0; i < header.size(); ++i) index.emplace(header[i], static_cast<long>(i));
+  std::vector<long> cols;
+  for (std::size_t m = 1;; ++m) {
+    const auto found = index.find(prefix + std::to_string(m));
+    if (found == index.end()) return cols;
+    cols.push_back(found->second);
+  }
 }
 
 }  // namespace ssrfleet::io

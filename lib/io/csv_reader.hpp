@@ -25,7 +25,10 @@ class CsvReader {
   // source_name is what messages call the input (a path, or "<stdin>").
   CsvReader(std::istream& in, std::string source_name);
 
-  // Reads the next non-comment, non-blank line. Returns false at end of input.
+  // Reads the next non-comment, non-blank line. Returns false at end of input. A line longer than
+  // kMaxCsvLineBytes (1 MiB) is a DataError (field "line") once that much is read, never read
+  // whole; one with more than kMaxCsvColumns (100,000) fields a DataError (field "columns")
+  // before it is split (util/line_reader.hpp).
   bool next(CsvRow& row);
 
   // In follow mode a last line without its newline is a record still being written: it is held
@@ -50,5 +53,10 @@ double parse_finite(const std::string& text, const std::string& source, std::siz
 
 // Index of `name` in header, or -1.
 long column_index(const std::vector<std::string>& header, const std::string& name);
+
+// The columns prefix1, prefix2, ... in order (each at its first occurrence in the header), up to
+// the first number missing. One pass over the header (a name lookup per number would take
+// columns^2 steps on a header of 100,000 if_ columns).
+std::vector<long> numbered_columns(const std::vector<std::string>& header, const std::string& prefix);
 
 }  // namespace ssrfleet::io

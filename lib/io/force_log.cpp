@@ -34,11 +34,7 @@ std::vector<records::ForceRecord> read_force_log(std::istream& in, const std::st
   const std::size_t speed_col = require("speed_mps");
   const long time_col = column_index(h, "time_s"), mass_col = column_index(h, "sprung_mass_kg");
   std::vector<std::size_t> force_cols;
-  for (int m = 1;; ++m) {
-    const long c = column_index(h, "force_" + std::to_string(m));
-    if (c < 0) break;
-    force_cols.push_back(static_cast<std::size_t>(c));
-  }
+  for (const long c : numbered_columns(h, "force_")) force_cols.push_back(static_cast<std::size_t>(c));
   if (force_cols.empty()) {
     const bool impact_factors = column_index(h, "if_1") >= 0;
     throw DataError(src, header.line, "force_1",

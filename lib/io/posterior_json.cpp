@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
+#include <type_traits>
 
 #include "io/atomic_file.hpp"
 #include "model/fleet_model.hpp"
@@ -88,10 +91,26 @@ namespace {
 template <class T>
 T get_field(const nlohmann::json& j, const char* key, const std::string& file, const std::string& where) {
   if (!j.is_object() || !j.contains(key)) throw DataError(file, 0, where + key, "missing");
-  try {
-    return j.at(key).get<T>();
-  } catch (const nlohmann::json::exception&) {
-    throw DataError(file, 0, where + key, "has the wrong type");
+  const nlohmann::json& v = j.at(key);
+  if constexpr (std::is_integral_v<T>) {
+    // nlohmann converts any number to an integer by a plain cast, undefined behaviour for 1e300
+    // (UBSan, found by fuzz/posterior_json_fuzzer): take whole numbers in T's range only.
+    const bool fits = v.is_number_unsigned()
+                          ? v.get<std::uint64_t>() <= static_cast<std::uint64_t>(std::numeric_limits<T>::max())
+                          : v.is_number_integer() && v.get<std::int64_t>() >= std::numeric_limits<T>::min() &&
+                                v.get<std::int64_t>() <= std::numeric_limits<T>::max();
+    if (!fits) {
+      throw DataError(file, 0, where + key,
+                      "must be a whole number from " + std::to_string(std::numeric_limits<T>::min()) + " to " +
+                          std::to_string(std::numeric_limits<T>::max()) + ", found " + v.dump());
+    }
+    return v.is_number_unsigned() ? static_cast<T>(v.get<std::uint64_t>()) : static_cast<T>(v.get<std::int64_t>());
+  } else {
+    try {
+      return v.get<T>();
+    } catch (const nlohmann::json::exception&) {
+      throw DataError(file, 0, where + key, "has the wrong type");
+    }
   }
 }
 
@@ -176,15 +195,34 @@ fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std:
   return c;
 }
 
+nlohmann::json parse_json(std::istream& in, const std::string& path) {
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    // parse_error, and out_of_range for a number past a double ("2e4000", found by
+    // fuzz/posterior_json_fuzzer: it escaped as an internal error).
+    throw DataError(path, 0, "json", std::string("not valid JSON (") + e.what() + ")");
+  }
+}
+
 nlohmann::json parse_json_file(std::string path) {
   if (std::filesystem::is_directory(path)) path = (std::filesystem::path(path) / "posterior.json").string();
   std::ifstream in(path);
   if (!in) throw MissingInputError("cannot open posterior file '" + path + "'");
-  try {
-    return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw DataError(path, 0, "json", std::string("not valid JSON (") + e.what() + ")");
+  return parse_json(in, path);
+}
+
+fleet::ClassPosteriors classes_from_json(const nlohmann::json& j, const std::string& path);
+
+// A single-class posterior; a file of classes is refused, naming them.
+fleet::PosteriorCloud single_posterior(const nlohmann::json& j, const std::string& path) {
+  if (j.is_object() && j.contains("classes")) {
+    const fleet::ClassPosteriors classes = classes_from_json(j, path);
+    throw DataError(path, 0, "classes",
+                    "holds a posterior per vehicle class (" + fleet::list_labels(classes) +
+                        "); this command reads a single-class posterior");
   }
+  return parse_posterior_object(j, path, "");
 }
 
 std::string file_path(const std::string& path) {
@@ -193,20 +231,19 @@ std::string file_path(const std::string& path) {
 }  // namespace
 
 fleet::PosteriorCloud read_posterior_file(const std::string& path_in) {
-  const std::string path = file_path(path_in);
-  const nlohmann::json j = parse_json_file(path_in);
-  if (j.is_object() && j.contains("classes")) {
-    fleet::ClassPosteriors classes = read_posterior_classes(path_in);
-    throw DataError(path, 0, "classes",
-                    "holds a posterior per vehicle class (" + fleet::list_labels(classes) +
-                        "); this command reads a single-class posterior");
-  }
-  return parse_posterior_object(j, path, "");
+  return single_posterior(parse_json_file(path_in), file_path(path_in));
+}
+
+fleet::PosteriorCloud read_posterior(std::istream& in, const std::string& path) {
+  return single_posterior(parse_json(in, path), path);
 }
 
 fleet::ClassPosteriors read_posterior_classes(const std::string& path_in) {
-  const std::string path = file_path(path_in);
-  const nlohmann::json j = parse_json_file(path_in);
+  return classes_from_json(parse_json_file(path_in), file_path(path_in));
+}
+
+namespace {
+fleet::ClassPosteriors classes_from_json(const nlohmann::json& j, const std::string& path) {
   if (!j.is_object() || !j.contains("classes")) return {fleet::ClassPosterior{"", parse_posterior_object(j, path, "")}};
   if (get_field<int>(j, "format_version", path, "") != kClassesFormatVersion) {
     throw DataError(path, 0, "format_version",
@@ -238,6 +275,7 @@ fleet::ClassPosteriors read_posterior_classes(const std::string& path_in) {
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.label < b.label; });
   return out;
 }
+}  // namespace
 
 nlohmann::json posterior_classes_to_json(const fleet::ClassPosteriors& classes,
                                          const std::vector<std::vector<fleet::ParameterSummary>>& hyper,

@@ -4,6 +4,7 @@
 // summary is computed by fleet::summarise_cloud (fleet/posterior_summary.hpp).
 #pragma once
 
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,8 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& cloud,
 // missing file is a MissingInputError. A file of several vehicle classes is a DataError (field
 // "classes") naming them: read it with read_posterior_classes.
 fleet::PosteriorCloud read_posterior_file(const std::string& path);
+// The same from a stream; `source` names it in messages.
+fleet::PosteriorCloud read_posterior(std::istream& in, const std::string& source);
 
 void write_posterior_file(const std::string& path, const fleet::PosteriorCloud& cloud,
                           const std::vector<fleet::ParameterSummary>& hyper,

@@ -16,6 +16,11 @@ std::vector<records::Truck> read_truck_list_file(const std::string& path, double
                                                double lateral_max_m) {
   std::ifstream in(path);
   if (!in) throw MissingInputError("cannot open truck list '" + path + "'");
+  return read_truck_list(in, path, lateral_min_m, lateral_max_m);
+}
+
+std::vector<records::Truck> read_truck_list(std::istream& in, const std::string& path, double lateral_min_m,
+                                          double lateral_max_m) {
   CsvReader csv(in, path);
   CsvRow row;
   if (!csv.next(row)) throw DataError(path, 1, "header", "empty file: no header line");

@@ -3,6 +3,7 @@
 // optional `class` (the truck's vehicle class; written when any truck has one).
 #pragma once
 
+#include <istream>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -16,6 +17,9 @@ namespace ssrfleet::io {
 // road surface). Any failure is a DataError naming file, line and field.
 std::vector<records::Truck> read_truck_list_file(const std::string& path, double lateral_min_m,
                                                double lateral_max_m);
+// The same from a stream; `source` names it in messages.
+std::vector<records::Truck> read_truck_list(std::istream& in, const std::string& source, double lateral_min_m,
+                                          double lateral_max_m);
 
 // Writes trucks in the same format at full precision.
 void write_truck_list(std::ostream& out, const std::vector<records::Truck>& trucks);

@@ -16,14 +16,8 @@ namespace {
 // Columns named prefix1..prefixM, consecutive from 1, in any order in the header.
 std::vector<long> numbered_columns(const std::vector<std::string>& header, const std::string& prefix,
                                    std::vector<std::string>& names) {
-  std::vector<long> cols;
-  for (int m = 1;; ++m) {
-    const std::string name = prefix + std::to_string(m);
-    const long c = column_index(header, name);
-    if (c < 0) break;
-    cols.push_back(c);
-    names.push_back(name);
-  }
+  std::vector<long> cols = io::numbered_columns(header, prefix);
+  for (std::size_t m = 1; m <= cols.size(); ++m) names.push_back(prefix + std::to_string(m));
   return cols;
 }
 

@@ -230,10 +230,11 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
         runs_below(broad ? keep_limit + 2.0 * options.mode_margin_nats / u_ref : keep_limit);
     const std::size_t kept_runs = runs.size();
     if (!broad && options.mode_margin_nats > 0.0) {
-      for (const auto& [a, b] : runs_below(keep_limit + 2.0 * options.mode_margin_nats / u_ref)) {
+      for (const auto& run : runs_below(keep_limit + 2.0 * options.mode_margin_nats / u_ref)) {
+        // (run, not a structured binding: clang before 16 cannot capture a binding in a lambda.)
         const bool touches = std::any_of(runs.begin(), runs.begin() + static_cast<std::ptrdiff_t>(kept_runs),
-                                         [&](const auto& r) { return a <= r.second && r.first <= b; });
-        if (!touches) runs.emplace_back(a, b);
+                                         [&](const auto& r) { return run.first <= r.second && r.first <= run.second; });
+        if (!touches) runs.push_back(run);
       }
     }
     const double fit_line = (fit.lateral_m - surface.y0_m) / surface.dy_m;
@@ -354,9 +355,10 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
         evaluated[pending[p]] = std::move(pieces);
       }
       std::vector<std::pair<int, int>> next;
-      for (const auto& [ij, pieces] : evaluated) {
+      for (const auto& node : evaluated) {
+        const auto& [ij, pieces] = node;
         if (!std::any_of(pieces.begin(), pieces.end(),
-                         [&](const NodeResult& r) { return score(ij, r) >= best_score - options.keep_nats; }))
+                         [&](const NodeResult& r) { return score(node.first, r) >= best_score - options.keep_nats; }))
           continue;
         for (auto [di, dj] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
           const std::pair<int, int> nb{ij.first + di, ij.second + dj};

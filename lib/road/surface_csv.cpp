@@ -1,5 +1,6 @@
 #include "road/surface_csv.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -12,6 +13,7 @@
 
 #include "road/road_file.hpp"
 #include "util/errors.hpp"
+#include "util/line_reader.hpp"
 
 namespace ssrfleet::road {
 
@@ -79,10 +81,25 @@ Surface read_surface_csv(std::istream& in, const std::string& source) {
   std::vector<std::size_t> x_line;
   std::vector<double> heights;  // row-major while reading
 
-  while (std::getline(in, text)) {
+  for (;;) {
+    const LineRead got = read_bounded_line(in, text, kMaxCsvLineBytes);
+    if (got == LineRead::end) break;
     ++line_no;
+    if (got == LineRead::too_long) {
+      throw DataError(source, line_no, "line",
+                      "the line is longer than " + std::to_string(kMaxCsvLineBytes) +
+                          " bytes (1 MiB), the most a road CSV line may hold; not read further");
+    }
     const std::string_view line = trim(text);
     if (line.empty() || line.front() == '#') continue;
+    if (static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')) >= kMaxCsvColumns) {
+      throw DataError(source, line_no, "columns",
+                      "more than " + std::to_string(kMaxCsvColumns) + " columns, the most a road CSV line may hold");
+    }
+    if (!header_cells.empty() &&
+        static_cast<double>(heights.size() + header_cells.size() - 1) > kMaxSurfaceCells) {
+      throw DataError(source, line_no, "x_m", "the surface holds more than 1e8 heights, the most ssrfleet reads");
+    }
     const auto cells = split_cells(line);
     if (header_cells.empty()) {
       header_line = line_no;

@@ -13,7 +13,9 @@
 // starting with x_m (field "x_m"), a non-numeric lateral header (field: that header cell), fewer
 // than 2 rows (field "x_m") or 2 lateral lines (field "header"), uneven or non-increasing spacing
 // in x (field "x_m") or y (field: the offending header cell); spacing is even when each step is
-// within 1e-6 (relative) of the first.
+// within 1e-6 (relative) of the first. Absurd sizes are refused before they are read whole
+// (util/line_reader.hpp): a line longer than 1 MiB (field "line"), more than 100,000 columns
+// (field "columns"), more than 1e8 heights (field "x_m").
 #pragma once
 
 #include <iosfwd>

@@ -11,7 +11,7 @@ struct SensorArray {
   double spacing_m = 1.5;
   int count = 16;
 
-  // Throws UsageError unless first >= 0, spacing > 0 (or count == 1) and count >= 1.
+  // Throws UsageError unless first >= 0, spacing > 0 (or count == 1) and 1 <= count <= 10,000.
   void validate() const;
   std::vector<double> positions_m() const;
 };

@@ -69,6 +69,10 @@ class TemperedSampler {
  public:
   using ProgressCallback = std::function<void(const StageSummary& stage_so_far, const StepInfo& step)>;
 
+  // The most particles a sampler takes: 7 hyperparameters x 1e7 particles is 560 MB before any
+  // truck; more is a typing error, refused before anything is allocated (README "Input limits").
+  static constexpr Eigen::Index kMaxParticles = 10'000'000;
+
   struct Options {
     Eigen::Index particles = 1000;  // P; must equal model.particles()
     int threads = default_threads();

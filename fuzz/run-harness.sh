@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Runs one libFuzzer harness for a given time over a copy of its seed corpus and prints one line:
+#   <name>: <execs> execs, cov <cov>, ft <ft>, corpus <n> inputs, crashes <k>
+# usage: fuzz/run-harness.sh FUZZER SEED_CORPUS_DIR WORK_DIR SECONDS
+# The repository's corpus is never written: the run works in WORK_DIR/corpus (new inputs land there)
+# and WORK_DIR/artifacts (crash-*, timeout-*, oom-*, leak-* files, each a reproducer:
+# FUZZER WORK_DIR/artifacts/crash-...). Exit 0 only if the run ended with no artifact.
+# Limits per input: 10 s (a hang), 1 GiB in one malloc or 2 GiB resident (an allocation from a small
+# input that large is a bug: issue 20 item 8).
+set -euo pipefail
+fuzzer=$1 seeds=$2 work=$3 seconds=$4
+name=$(basename "$fuzzer" _fuzzer)
+rm -rf "$work"
+mkdir -p "$work/corpus" "$work/artifacts"
+cp -r "$seeds"/. "$work/corpus/"
+# Inputs up to 64 KiB, or the largest seed (a stream state holds whole truck tables).
+max_len=$(find "$seeds" -type f -printf '%s\n' | sort -n | tail -1)
+(( max_len < 65536 )) && max_len=65536
+status=0
+start=$SECONDS
+"$fuzzer" "$work/corpus" -max_total_time="$seconds" -print_final_stats=1 -timeout=10 \
+  -malloc_limit_mb=1024 -rss_limit_mb=2048 -max_len="$max_len" -artifact_prefix="$work/artifacts/" \
+  >"$work/log.txt" 2>&1 || status=$?
+took=$((SECONDS - start))
+stat() { grep -E "^stat::$1:" "$work/log.txt" | tail -1 | awk '{print $2}'; }
+cov=$(grep -E '#[0-9]+.*cov: ' "$work/log.txt" | tail -1 | sed -E 's/.*cov: ([0-9]+).*/\1/' || true)
+ft=$(grep -E '#[0-9]+.*ft: ' "$work/log.txt" | tail -1 | sed -E 's/.*ft: ([0-9]+).*/\1/' || true)
+crashes=$(find "$work/artifacts" -type f | wc -l)
+echo "$name: $(stat number_of_executed_units) execs in ${took} s, cov ${cov:-?}, ft ${ft:-?}," \
+     "corpus $(find "$work/corpus" -type f | wc -l) inputs, crashes $crashes (log $work/log.txt)"
+if [[ $crashes -gt 0 || $status -ne 0 ]]; then
+  find "$work/artifacts" -type f | sed 's/^/  artifact: /'
+  grep -E "ERROR: |SUMMARY: |runtime error" "$work/log.txt" | head -5 | sed 's/^/  /'
+  exit 1
+fi
