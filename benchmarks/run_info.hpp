@@ -10,6 +10,21 @@
 namespace ssrfleet::bench {
 
 // The 1-minute load average from /proc/loadavg, or -1 when unreadable.
+// The resident set (VmRSS, kB) of a process ("self" or a pid) from /proc; -1 if unreadable.
+inline long resident_kb(const std::string& process = "self") {
+  std::ifstream status("/proc/" + process + "/status");
+  std::string key;
+  while (status >> key) {
+    if (key == "VmRSS:") {
+      long kb = 0;
+      status >> kb;
+      return kb;
+    }
+    std::getline(status, key);
+  }
+  return -1;
+}
+
 inline double load_average_1min() {
   std::ifstream f("/proc/loadavg");
   double l = -1.0;

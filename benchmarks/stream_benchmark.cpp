@@ -18,25 +18,13 @@
 
 #include "fleet/fleet_smc.hpp"
 #include "fleet/simulator.hpp"
+#include "run_info.hpp"
 #include "model/fleet_distribution.hpp"
 #include "site/road_source.hpp"
 
 using namespace ssrfleet;
 
 namespace {
-long resident_kb() {
-  std::ifstream status("/proc/self/status");
-  std::string key;
-  while (status >> key) {
-    if (key == "VmRSS:") {
-      long kb = 0;
-      status >> kb;
-      return kb;
-    }
-    std::getline(status, key);
-  }
-  return -1;
-}
 
 double trucks_per_second(const site::Site& site, const std::vector<records::WimRecord>& records, long particles,
                          Eigen::Index window) {
@@ -100,7 +88,7 @@ int main(int argc, char** argv) {
     r.truck_id = std::to_string(t);  // fresh ids (a prefix would trip GCC 12's -Wrestrict false positive)
     smc.absorb(r);
     if (t == 1000 || t == 10000 || t == 100000 || t == memory_trucks) {
-      const long kb = resident_kb();
+      const long kb = bench::resident_kb();
       if (t == 1000) at_1000 = kb;
       const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       std::cout << "windowed memory after " << t << " trucks (" << memory_particles << " particles, window " << window

@@ -26,25 +26,12 @@
 
 #include "io/history_db.hpp"
 #include "io/posterior_json.hpp"
+#include "run_info.hpp"
 
 using namespace ssrfleet;
 namespace fs = std::filesystem;
 
 namespace {
-
-long resident_kb(pid_t pid) {
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-  std::string key;
-  while (status >> key) {
-    if (key == "VmRSS:") {
-      long kb = 0;
-      status >> kb;
-      return kb;
-    }
-    std::getline(status, key);
-  }
-  return -1;
-}
 
 std::vector<std::string> split(const std::string& line) {
   std::vector<std::string> f;
@@ -177,7 +164,7 @@ int main(int argc, char** argv) {
   int status = 0;
   for (;;) {
     std::this_thread::sleep_for(std::chrono::seconds(5));
-    const long rss = resident_kb(pid);
+    const long rss = bench::resident_kb(std::to_string(pid));
     long absorbed = -1;
     try {
       const io::HistoryDb history(state + "/history.sqlite", "base");

@@ -1,5 +1,7 @@
 #include "cli_common.hpp"
 
+#include "io/posterior_json.hpp"
+
 #include <charconv>
 #include <functional>
 #include <iostream>
@@ -158,6 +160,19 @@ void require_fitted_site(const fleet::PosteriorCloud& cloud, const std::string& 
   throw UsageError("the posterior in '" + posterior_path + "' was fitted on another site (road '" + cloud.road_name +
                    "', fingerprint " + cloud.site_fingerprint + ") than road '" + site.surface().name +
                    "' with these site options (fingerprint " + site.fingerprint() + ")" + hint);
+}
+
+ClassSelection select_posterior_classes(const std::string& source, const std::string& class_label,
+                                        const std::string& mix_text) {
+  if (!class_label.empty() && !mix_text.empty()) throw UsageError("give --class or --mix, not both");
+  fleet::ClassPosteriors classes = io::read_posterior_classes(source);
+  if (fleet::unlabelled(classes) && (!class_label.empty() || !mix_text.empty())) {
+    throw UsageError(std::string(class_label.empty() ? "--mix" : "--class") + ": the posterior in '" + source +
+                     "' has no vehicle classes (its log had no class column)");
+  }
+  if (!class_label.empty()) classes = fleet::select_class(classes, class_label);
+  std::vector<double> shares = fleet::class_shares(classes, fleet::parse_mix(mix_text));
+  return {std::move(classes), std::move(shares)};
 }
 
 }  // namespace ssrfleet::cli

@@ -10,6 +10,7 @@
 #include <boost/program_options.hpp>
 
 #include "fleet/posterior_cloud.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "io/wim_log.hpp"
 #include "site/site.hpp"
 
@@ -62,5 +63,15 @@ void require_fitted_site(const fleet::PosteriorCloud& cloud, const std::string& 
 
 // Writes through `write` to `path` atomically, or to stdout when path is "-" or empty.
 void write_output(const std::string& path, const std::function<void(std::ostream&)>& write);
+
+// The posterior's classes that --class / --mix ask for (predict, damage), read from `source` (a
+// posterior file or a state directory), and their shares. UsageError for both options at once or
+// either on a posterior without classes.
+struct ClassSelection {
+  fleet::ClassPosteriors classes;
+  std::vector<double> shares;
+};
+ClassSelection select_posterior_classes(const std::string& source, const std::string& class_label,
+                                        const std::string& mix_text);
 
 }  // namespace ssrfleet::cli

@@ -115,14 +115,9 @@ int run_damage(int argc, const char* const argv[]) {
   options.seed = parse_seed(seed_text);
   options.traffic_bootstrap = !fixed_traffic;
   options.validate();
-  if (!class_label.empty() && !mix_text.empty()) throw UsageError("give --class or --mix, not both");
-  fleet::ClassPosteriors classes = io::read_posterior_classes(source);
-  if (fleet::unlabelled(classes) && (!class_label.empty() || !mix_text.empty())) {
-    throw UsageError(std::string(class_label.empty() ? "--mix" : "--class") + ": the posterior in '" + source +
-                     "' has no vehicle classes (its log had no class column)");
-  }
-  if (!class_label.empty()) classes = fleet::select_class(classes, class_label);
-  const std::vector<double> shares = fleet::class_shares(classes, fleet::parse_mix(mix_text));
+  const ClassSelection selection = select_posterior_classes(source, class_label, mix_text);
+  const fleet::ClassPosteriors& classes = selection.classes;
+  const std::vector<double>& shares = selection.shares;
   const fleet::PosteriorCloud& cloud = classes.front().cloud;
   long total_trucks = 0;
   for (const auto& c : classes) total_trucks += c.cloud.trucks_seen;

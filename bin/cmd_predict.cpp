@@ -46,14 +46,9 @@ int run_predict(int argc, const char* const argv[]) {
   }
   options.seed = parse_seed(seed_text);
   options.traffic_bootstrap = !fixed_traffic;
-  if (!class_label.empty() && !mix_text.empty()) throw UsageError("give --class or --mix, not both");
-  fleet::ClassPosteriors classes = io::read_posterior_classes(posterior_path);
-  if (fleet::unlabelled(classes) && (!class_label.empty() || !mix_text.empty())) {
-    throw UsageError(std::string(class_label.empty() ? "--mix" : "--class") + ": the posterior in '" + posterior_path +
-                     "' has no vehicle classes (its log had no class column)");
-  }
-  if (!class_label.empty()) classes = fleet::select_class(classes, class_label);
-  const std::vector<double> shares = fleet::class_shares(classes, fleet::parse_mix(mix_text));
+  const ClassSelection selection = select_posterior_classes(posterior_path, class_label, mix_text);
+  const fleet::ClassPosteriors& classes = selection.classes;
+  const std::vector<double>& shares = selection.shares;
   const fleet::PosteriorCloud& cloud = classes.front().cloud;
   const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   if (!new_road) require_fitted_site(cloud, posterior_path, site, "; pass --new-road to predict for a different road on purpose");
