@@ -37,6 +37,10 @@ void MarginalTarget::save_particles(BinaryWriter& out) const {
   out.value<std::uint64_t>(speed_mps_.size());
 }
 
+// A truck's fit is written as its bytes: it must have no padding, whose bytes are indeterminate.
+static_assert(sizeof(model::TruckFit) == 8 * sizeof(double) + 2 * sizeof(std::int32_t),
+              "TruckFit has padding: a truck log would hold indeterminate bytes");
+
 void MarginalTarget::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const {
   for (std::size_t i = begin; i < end; ++i) {
     out.value(speed_mps_[i]);

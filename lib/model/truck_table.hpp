@@ -111,6 +111,10 @@ struct TruckFit {
   double tyre_stiffness_sd_per_sigma = 0.0;
   double stiffness_correlation = 0.0;  // corr(k, k_t) of the likelihood
   int passes = 0;                   // integrator passes spent on the search
+  // The 4 bytes after `passes` that alignment would leave as padding, named so they are always 0:
+  // a stream's truck log writes this struct's bytes whole (fleet/marginal_target_checkpoint.cpp),
+  // and uninitialised padding made two runs' logs differ in those bytes and in their checksums.
+  std::int32_t reserved = 0;
 };
 
 struct TruckTable {
