@@ -73,7 +73,10 @@ Fit fit_log(const site::Site& site, const fleet::PriorBounds& prior, const std::
   options.sampler.seed = smc_seed;
   const auto t0 = std::chrono::steady_clock::now();
   fleet::MarginalSmc smc(site, options);
-  for (const auto& rec : records) smc.absorb(rec);
+  for (std::size_t t = 0; t < records.size(); ++t) {
+    smc.prepare(records, t);  // as fleet::replay (ssrfleet fit) does
+    smc.absorb(records[t]);
+  }
   const smc::MhSummary final_moves = smc.rejuvenate(options.sampler.schedule.final_sweeps);
   Fit fit;
   fit.cloud = smc.cloud();

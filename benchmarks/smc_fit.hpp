@@ -27,7 +27,10 @@ inline fleet::MarginalSmc::Options smc_options(std::uint64_t smc_seed, int threa
 
 inline void replay_and_rejuvenate(fleet::MarginalSmc& smc, const std::vector<records::WimRecord>& records,
                                   int final_sweeps) {
-  for (const auto& rec : records) smc.absorb(rec);
+  for (std::size_t t = 0; t < records.size(); ++t) {
+    smc.prepare(records, t);  // the next trucks' tables built one per thread, as fleet::replay does
+    smc.absorb(records[t]);
+  }
   smc.rejuvenate(final_sweeps);
 }
 

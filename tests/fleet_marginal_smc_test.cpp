@@ -112,6 +112,94 @@ TEST_CASE("the marginal core gives the same bits with 1 and 2 threads", "[margin
   CHECK(bytes_of(one) == bytes_of(two));
 }
 
+TEST_CASE("tables prebuilt one truck per thread give the bits of tables built one at a time, across "
+          "frozen spans, rebuilds and a resume",
+          "[marginal]") {
+  // 240 trucks: from truck 64 on the new trucks' table options are frozen for spans of 2 to 7
+  // trucks, and the tables are rebuilt at least once after that (the lattice follows the fleet sds'
+  // posterior), so some spans are cut short by a rebuild and their prebuilt tables thrown away.
+  Case c(240, 4);
+  const auto& records = c.log.records;
+  // fit's way: fleet::replay, which prepares (prebuilds) before every absorb, on 2 threads.
+  auto replayed_core = fleet::make_online_fit(c.site, [] {
+    fleet::OnlineFitOptions o;
+    o.marginal = options(96, 2, 7);
+    return o;
+  }());
+  fleet::ReplayOptions ro;
+  ro.final_sweeps = 0;
+  fleet::replay(*replayed_core, records, ro);
+  const auto* replayed = replayed_core->marginal();
+  REQUIRE(replayed != nullptr);
+
+  // A stream's way: one record at a time, no prebuild, 1 thread; saved and restored mid-span.
+  fleet::MarginalSmc first(c.site, options(96, 1, 7));
+  int rebuilds_after_64 = 0;
+  std::size_t t = 0;
+  for (; t < 181; ++t) {
+    first.absorb(records[t]);
+    if (t >= 64 && !first.last_rebuild().empty()) ++rebuilds_after_64;
+  }
+  std::ostringstream saved;
+  {
+    BinaryWriter w(saved);
+    first.save(w);
+  }
+  fleet::MarginalSmc resumed(c.site, options(96, 2, 7));
+  {
+    std::istringstream is(saved.str());
+    BinaryReader in(is, "checkpoint.bin");
+    resumed.restore(in);
+  }
+  for (; t < records.size(); ++t) {
+    resumed.absorb(records[t]);
+    if (!resumed.last_rebuild().empty()) ++rebuilds_after_64;
+  }
+  CHECK(rebuilds_after_64 >= 1);
+  CHECK(replayed->target().prebuilt_used() > 100);  // the replay did take prebuilt tables
+  CHECK(resumed.target().prebuilt_used() == 0);
+  CHECK(bytes_of(resumed) == bytes_of(*replayed));
+  CHECK(resumed.target().integrator_passes() == replayed->target().integrator_passes());
+}
+
+TEST_CASE("a marginal target of format 1 (before frozen table options) is migrated and resumes exactly",
+          "[marginal]") {
+  Case c(20, 3);
+  fleet::MarginalSmc straight(c.site, options(64, 2, 4));
+  for (const auto& r : c.log.records) straight.absorb(r);
+
+  // After its first truck a core has no frozen options: its format-2 bytes are format 1's with the
+  // version changed and one flag byte (0: none frozen) after the pass count.
+  fleet::MarginalSmc first(c.site, options(64, 2, 4));
+  first.absorb(c.log.records[0]);
+  std::string bytes = bytes_of(first);
+  const std::uint64_t magic = 0x4e52414d46525353ULL;  // the marginal target's "SSRFMARN"
+  const std::size_t at = bytes.find(std::string(reinterpret_cast<const char*>(&magic), sizeof magic));
+  REQUIRE(at != std::string::npos);
+  std::uint32_t version = 0;
+  std::memcpy(&version, bytes.data() + at + 8, sizeof version);
+  REQUIRE(version == 2);
+  // magic, version, lattice, σ_ref, two absent populations' flags, last rebuild, rebuilds, passes.
+  const std::size_t flag = at + 8 + 4 + sizeof(model::Lattice) + 8 + 1 + 1 + 8 + 4 + 8;
+  REQUIRE(bytes[flag] == 0);
+  bytes.erase(flag, 1);
+  version = 1;
+  std::memcpy(bytes.data() + at + 8, &version, sizeof version);
+  // The one truck record's seal covers everything before it: seal the edited bytes again.
+  const std::size_t body = bytes.size() - sizeof(std::uint64_t);
+  const std::uint64_t seal = detail::fnv1a(detail::kFnvOffset, bytes.data(), body);
+  std::memcpy(bytes.data() + body, &seal, sizeof seal);
+
+  fleet::MarginalSmc resumed(c.site, options(64, 2, 4));
+  {
+    std::istringstream is(bytes);
+    BinaryReader in(is, "checkpoint.bin");
+    resumed.restore(in);
+  }
+  for (std::size_t t = 1; t < c.log.records.size(); ++t) resumed.absorb(c.log.records[t]);
+  CHECK(bytes_of(resumed) == bytes_of(straight));
+}
+
 TEST_CASE("a marginal-core checkpoint resumes bit-identically, and an old or cut one is refused by name",
           "[marginal]") {
   Case c(14, 6);

@@ -3,6 +3,7 @@
 #include "fleet/checkpoint_header.hpp"
 #include "fleet/smc_cloud.hpp"
 
+#include <algorithm>
 #include <tuple>
 
 #include "util/errors.hpp"
@@ -39,6 +40,17 @@ smc::StageSummary MarginalSmc::absorb(const records::WimRecord& record) {
     target_.finish_stage();
   }
   return truck;
+}
+
+void MarginalSmc::prepare(const std::vector<records::WimRecord>& records, std::size_t next) {
+  if (next >= records.size()) return;
+  const std::size_t count = std::min(target_.prebuild_span(), records.size() - next);
+  if (count < 2) return;  // one truck: absorb() builds it with both threads
+  std::vector<MarginalTarget::UpcomingTruck> upcoming;
+  upcoming.reserve(count);
+  for (std::size_t i = next; i < next + count; ++i)
+    upcoming.push_back({records[i].speed_mps, records[i].sprung_mass_kg, &records[i].impact_factor});
+  target_.prebuild(upcoming, sampler_.weights(), parallel_);
 }
 
 smc::MhSummary MarginalSmc::rejuvenate(int sweeps) {

@@ -8,6 +8,7 @@
 
 #include <deque>
 #include <string>
+#include <vector>
 
 #include "fleet/marginal_target.hpp"
 #include "fleet/posterior_cloud.hpp"
@@ -48,6 +49,10 @@ class MarginalSmc {
   // Tempers the record's likelihood in (and rebuilds the tables if the posterior asks for it).
   // Returns the record's stage summary.
   smc::StageSummary absorb(const records::WimRecord& record);
+  // Before absorb(records[next]): builds the tables of the records from `next` on that the frozen
+  // table options cover, one truck per thread (MarginalTarget::prebuild). Only a speed-up for an
+  // offline replay: absorb() gives the same bits without it.
+  void prepare(const std::vector<records::WimRecord>& records, std::size_t next);
   // MCMC sweeps at φ = 1 (the posterior is unchanged; the cloud's duplicates spread out).
   smc::MhSummary rejuvenate(int sweeps);
 

@@ -164,6 +164,68 @@ model::TruckTableOptions MarginalTarget::table_options(const TableSettings& s) c
   return o;
 }
 
+std::int64_t MarginalTarget::freeze_span(std::int64_t n) const {
+  return std::clamp<std::int64_t>(n / options_.freeze_divisor, 1, options_.freeze_max);
+}
+
+const model::TruckTableOptions& MarginalTarget::frozen_table_options(const Eigen::ArrayXd& W) {
+  const std::int64_t n = trucks();
+  if (frozen_ && n < frozen_until_) return *frozen_;
+  // Only the population follows the cloud; lattice and σ_ref change by rebuilds alone, so that
+  // every table in the store shares them.
+  TableSettings now = settings_;
+  now.population = ideal_settings(W).population;
+  model::TruckTableOptions o = table_options(now);
+  o.max_piece_sd_m = max_piece_sd(W);
+  // The table measures its lateral approximation at the fleet's current (Z, σ_z) (a diagnostic:
+  // the tables do not depend on it).
+  o.lateral_check = model::TruckTableOptions::LateralReference{(W * theta_.row(kZ).transpose().array()).sum(),
+                                                               (W * theta_.row(kSigmaZ).transpose().array()).sum()};
+  frozen_ = o;
+  frozen_until_ = n + freeze_span(n);
+  ++freeze_id_;
+  prebuilt_.clear();
+  return *frozen_;
+}
+
+std::size_t MarginalTarget::prebuild_span() const {
+  const std::int64_t n = trucks();
+  if (n == 0) return 0;
+  return static_cast<std::size_t>(frozen_ && n < frozen_until_ ? frozen_until_ - n : freeze_span(n));
+}
+
+std::size_t MarginalTarget::prebuild(const std::vector<UpcomingTruck>& upcoming, const Eigen::ArrayXd& W,
+                                     const smc::ParallelFor& parallel) {
+  if (mode_ != Mode::kIdle) throw std::logic_error("MarginalTarget::prebuild: finish_stage() was not called");
+  const std::int64_t n = trucks();
+  if (n == 0 || upcoming.empty()) return 0;
+  const model::TruckTableOptions o = frozen_table_options(W);
+  const auto count = static_cast<std::size_t>(std::min<std::int64_t>(frozen_until_ - n, static_cast<std::int64_t>(upcoming.size())));
+  // Already built for these options: nothing to do (the cache holds the span from its start).
+  if (!prebuilt_.empty() && prebuilt_.front().truck <= n && prebuilt_.back().truck >= n + static_cast<std::int64_t>(count) - 1)
+    return 0;
+  for (const auto& u : upcoming) {
+    if (u.impact_factors == nullptr || u.impact_factors->size() != site_.sensors()) {
+      throw UsageError("MarginalTarget::prebuild: an upcoming truck has no impact factors for this site");
+    }
+  }
+  std::vector<Prebuilt> built(count);
+  // One truck per thread; each table is built serially, so its bits are those of add_truck's.
+  parallel(static_cast<Eigen::Index>(count), [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const UpcomingTruck& u = upcoming[static_cast<std::size_t>(i)];
+      Prebuilt& b = built[static_cast<std::size_t>(i)];
+      b.truck = n + i;
+      b.freeze_id = freeze_id_;
+      b.fit = model::fit_truck(site_, u.speed_mps, u.sprung_mass_kg, *u.impact_factors, o);
+      b.table = model::build_truck_table(site_, u.speed_mps, u.sprung_mass_kg, *u.impact_factors, settings_.lattice, o,
+                                         b.fit);
+    }
+  });
+  prebuilt_ = std::move(built);
+  return count;
+}
+
 void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Eigen::VectorXd& impact_factors,
                                const Eigen::ArrayXd& W, const smc::ParallelFor& parallel) {
   if (mode_ != Mode::kIdle) throw std::logic_error("MarginalTarget::add_truck: finish_stage() was not called");
@@ -172,25 +234,16 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
                     "has " + std::to_string(impact_factors.size()) + " values but the site has " +
                         std::to_string(site_.sensors()) + " sensors");
   }
-  TableSettings now = settings_;
-  if (trucks() > 0) {
-    // Only the population follows every truck; lattice and σ_ref change by rebuilds alone, so that
-    // every table in the store shares them.
-    now.population = ideal_settings(W).population;
-  }
-  model::TruckTableOptions o = table_options(now);
-  if (trucks() == 0) o.population.reset();
-  o.max_piece_sd_m = max_piece_sd(W);
-  if (trucks() > 0) {
-    // The table measures its lateral approximation at the fleet's current (Z, σ_z) (a diagnostic:
-    // the tables do not depend on it).
-    o.lateral_check = model::TruckTableOptions::LateralReference{(W * theta_.row(kZ).transpose().array()).sum(),
-                                                                 (W * theta_.row(kSigmaZ).transpose().array()).sum()};
-  }
-  const model::TruckFit fit = model::fit_truck(site_, speed_mps, sprung_mass_kg, impact_factors, o);
+  const util::ParallelRange range = [&parallel](Eigen::Index n, const util::RangeBody& body) { parallel(n, body); };
+  model::TruckFit fit;
+  model::TruckTable table;
   if (trucks() == 0) {
     // The first truck sets the lattice's origin and first spacing, and σ_ref (its own noise
     // estimate, inside the prior box); the rebuild rule corrects both as the posterior forms.
+    model::TruckTableOptions o = table_options(settings_);
+    o.population.reset();
+    o.max_piece_sd_m = max_piece_sd(W);
+    fit = model::fit_truck(site_, speed_mps, sprung_mass_kg, impact_factors, o);
     settings_.sigma_ref = std::clamp(fit.sigma_hat, options_.prior.lo[kSigmaIf], options_.prior.hi[kSigmaIf]);
     settings_.lattice.k_origin_npm = fit.stiffness_npm;
     settings_.lattice.kt_origin_npm = fit.tyre_stiffness_npm;
@@ -200,10 +253,21 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
         options_.lattice_fraction * fit.tyre_stiffness_sd_per_sigma * settings_.sigma_ref / std::sqrt(2.0);
     marginal_ = model::FleetMarginal(site_.sensors(), lateral_, settings_.lattice);
     o.sigma_ref = settings_.sigma_ref;
+    table = model::build_truck_table(site_, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
+  } else {
+    const model::TruckTableOptions& o = frozen_table_options(W);
+    const std::int64_t n = trucks();
+    const auto it = std::find_if(prebuilt_.begin(), prebuilt_.end(),
+                                 [&](const Prebuilt& b) { return b.truck == n && b.freeze_id == freeze_id_; });
+    if (it != prebuilt_.end()) {
+      fit = it->fit;
+      table = std::move(it->table);
+      ++prebuilt_used_;
+    } else {
+      fit = model::fit_truck(site_, speed_mps, sprung_mass_kg, impact_factors, o);
+      table = model::build_truck_table(site_, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
+    }
   }
-  const util::ParallelRange range = [&parallel](Eigen::Index n, const util::RangeBody& body) { parallel(n, body); };
-  const model::TruckTable table =
-      model::build_truck_table(site_, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
   passes_ += table.passes;
   if (std::isfinite(table.lateral_error_nats)) {
     ++lateral_checked_;
@@ -276,6 +340,9 @@ void MarginalTarget::begin_rebuild(const Eigen::ArrayXd& W, const smc::ParallelF
   trucks_at_last_rebuild_ = n;
   population_at_rebuild_ = ideal.population;
   ++rebuilds_;
+  // New trucks' options follow the new settings from the next truck on.
+  frozen_.reset();
+  prebuilt_.clear();
   mode_ = Mode::kCorrection;
 }
 

@@ -10,7 +10,9 @@ namespace ssrfleet::fleet {
 
 namespace {
 constexpr std::uint64_t kMagic = 0x4e52414d46525353ULL;  // "SSRFMARN"
-constexpr std::uint32_t kVersion = 1;
+// Version 2 adds the frozen options of new trucks' tables. A version-1 state (no frozen options) is
+// read as one whose options are due to freeze at its next truck: exact, as every table in it is.
+constexpr std::uint32_t kVersion = 2;
 
 }  // namespace
 
@@ -32,6 +34,21 @@ void MarginalTarget::save_particles(BinaryWriter& out) const {
   out.value<std::int64_t>(trucks_at_last_rebuild_);
   out.value<std::int32_t>(rebuilds_);
   out.value<std::int64_t>(passes_);
+  out.value<std::uint8_t>(frozen_ ? 1 : 0);
+  if (frozen_) {
+    // What frozen_table_options() took from the cloud; the rest is options_.table.
+    const model::TruckTableOptions& f = *frozen_;
+    out.value(f.sigma_ref);
+    out.value(f.k_start_npm);
+    out.value(f.kt_start_npm);
+    out.value<std::uint8_t>(f.start_is_close ? 1 : 0);
+    out.value<std::uint8_t>(f.population ? 1 : 0);
+    if (f.population) out.value(*f.population);
+    out.value(f.max_piece_sd_m);
+    out.value<std::uint8_t>(f.lateral_check ? 1 : 0);
+    if (f.lateral_check) out.value(*f.lateral_check);
+    out.value<std::int64_t>(frozen_until_);
+  }
   out.matrix(theta_);
   out.matrix(base_sum_.matrix());
   out.value<std::uint64_t>(speed_mps_.size());
@@ -66,7 +83,7 @@ void MarginalTarget::save_trucks(BinaryWriter& out, std::size_t begin, std::size
 std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   if (in.value<std::uint64_t>("marginal target") != kMagic) in.fail("marginal target", "not a marginal-core state");
   const auto version = in.value<std::uint32_t>("marginal target version");
-  if (version != kVersion) {
+  if (version != kVersion && version != 1) {
     in.fail("marginal target version", "format version " + std::to_string(version) + ", this build reads " +
                                            std::to_string(kVersion));
   }
@@ -81,6 +98,26 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   trucks_at_last_rebuild_ = in.value<std::int64_t>("trucks at last rebuild");
   rebuilds_ = in.value<std::int32_t>("rebuilds");
   passes_ = in.value<std::int64_t>("passes");
+  frozen_.reset();
+  frozen_until_ = 0;
+  prebuilt_.clear();
+  if (version >= 2 && in.value<std::uint8_t>("frozen table options")) {
+    model::TruckTableOptions f = options_.table;
+    f.sigma_ref = in.value<double>("frozen sigma_ref");
+    f.k_start_npm = in.value<double>("frozen k start");
+    f.kt_start_npm = in.value<double>("frozen kt start");
+    f.start_is_close = in.value<std::uint8_t>("frozen start is close") != 0;
+    if (in.value<std::uint8_t>("frozen population"))
+      f.population = in.value<model::TruckTableOptions::Population>("frozen population");
+    f.max_piece_sd_m = in.value<double>("frozen piece sd");
+    if (in.value<std::uint8_t>("frozen lateral check"))
+      f.lateral_check = in.value<model::TruckTableOptions::LateralReference>("frozen lateral check");
+    frozen_until_ = in.value<std::int64_t>("frozen until");
+    if (!(f.sigma_ref > 0.0) || !(f.max_piece_sd_m > 0.0) || frozen_until_ < 0) {
+      in.fail("frozen table options", "impossible values");
+    }
+    frozen_ = f;
+  }
   theta_ = in.matrix("theta", kHyperCount, options_.particles);
   base_sum_ = in.matrix("log-likelihood sums", options_.particles, 1).array();
   inc_ = Eigen::ArrayXd::Zero(options_.particles);

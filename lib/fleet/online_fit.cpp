@@ -32,6 +32,7 @@ class MarginalFit final : public CoreFit<MarginalSmc> {
  public:
   using CoreFit::CoreFit;
   std::string core() const override { return "marginal"; }
+  void prepare(const std::vector<records::WimRecord>& records, std::size_t next) override { smc_.prepare(records, next); }
   std::string note() const override {
     return smc_.last_rebuild().empty() ? "" : "tables rebuilt (" + smc_.last_rebuild() + ")";
   }

@@ -12,6 +12,7 @@
 #include <deque>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "fleet/fleet_smc.hpp"
 #include "fleet/marginal_smc.hpp"
@@ -27,6 +28,10 @@ class OnlineFit {
  public:
   virtual ~OnlineFit() = default;
   virtual smc::StageSummary absorb(const records::WimRecord& record) = 0;
+  // Before absorb(records[next]) in an offline replay: a core may do ahead, in parallel, work
+  // that the next records' absorbs would do one by one (the marginal core builds their tables).
+  // Only a speed-up: the results are the same bits without it.
+  virtual void prepare(const std::vector<records::WimRecord>& /*records*/, std::size_t /*next*/) {}
   // MCMC sweeps at φ = 1 after the last record of an offline replay (the posterior is unchanged).
   virtual void rejuvenate(int sweeps) = 0;
   virtual PosteriorCloud cloud() const = 0;

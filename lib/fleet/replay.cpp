@@ -16,6 +16,7 @@ ReplaySummary replay(OnlineFit& fit, const std::vector<records::WimRecord>& reco
   ReplaySummary s;
   const auto started = Clock::now();
   for (std::size_t t = 0; t < records.size(); ++t) {
+    fit.prepare(records, t);
     const smc::StageSummary stage = fit.absorb(records[t]);
     if (options.after_record) options.after_record(t, stage, fit);
   }
