@@ -354,17 +354,35 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
         }
         evaluated[pending[p]] = std::move(pieces);
       }
+      // A node's score: its best piece's.
+      auto node_score = [&](const std::pair<int, int>& ij, const std::vector<NodeResult>& pieces) {
+        double best = -kInf;
+        for (const NodeResult& r : pieces) best = std::max(best, score(ij, r));
+        return best;
+      };
+      const double threshold = best_score - options.keep_nats;
       std::vector<std::pair<int, int>> next;
       for (const auto& node : evaluated) {
         const auto& [ij, pieces] = node;
-        if (!std::any_of(pieces.begin(), pieces.end(),
-                         [&](const NodeResult& r) { return score(node.first, r) >= best_score - options.keep_nats; }))
-          continue;
+        const double here = node_score(ij, pieces);
+        if (!(here >= threshold)) continue;
         for (auto [di, dj] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
           const std::pair<int, int> nb{ij.first + di, ij.second + dj};
-          if (admissible(nb.first, nb.second) && !evaluated.count(nb) &&
-              std::find(next.begin(), next.end(), nb) == next.end())
-            next.push_back(nb);
+          if (!admissible(nb.first, nb.second) || evaluated.count(nb) ||
+              std::find(next.begin(), next.end(), nb) != next.end())
+            continue;
+          // The ring beyond the kept region: a concave score (a log-likelihood in (k, k_t) near
+          // Gaussian, plus the population's Gaussian) lies below its linear extrapolation, so a
+          // neighbour whose extrapolation from this node and the one behind it falls ring_margin_nats
+          // under the threshold would be evaluated only to be dropped. Another kept neighbour may
+          // still ask for it.
+          if (options.ring_margin_nats >= 0.0) {
+            const auto behind = evaluated.find({ij.first - di, ij.second - dj});
+            if (behind != evaluated.end() &&
+                2.0 * here - node_score(behind->first, behind->second) < threshold - options.ring_margin_nats)
+              continue;
+          }
+          next.push_back(nb);
         }
       }
       if (!next.empty() && round == 0) table.region_clipped = true;

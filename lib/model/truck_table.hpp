@@ -90,6 +90,13 @@ struct TruckTableOptions {
   // "Pieces"). The lateral prior's moment matching errs by about (piece sd / σ_z)⁴ / 100 nats at
   // most, so a quarter of the fleet's σ_z is plenty; MarginalTarget sets it so.
   double max_piece_sd_m = 0.1;
+  // The flood fill skips a neighbour of a kept node when the score's linear extrapolation through
+  // the node and the one behind it falls this far below the threshold (a concave score lies below
+  // it, so the neighbour would be evaluated only to be dropped). Negative: every neighbour is
+  // evaluated, as before. Measured at 0.5 against -1 (Table 1 fleet on AS1, 600 trucks; the second
+  // fleet on AS2, 120): 12 % and 11 % fewer table passes; 5 and 4 tables lost a node just above the
+  // threshold, whose log-likelihood at the true θ moved by at most 1.1e-7 nats.
+  double ring_margin_nats = 0.5;
   // If set, the table measures its own lateral approximation here (TruckTable::lateral_error_nats):
   // the fleet's current (Z, σ_z), e.g. the posterior means.
   struct LateralReference {
