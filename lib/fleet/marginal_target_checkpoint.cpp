@@ -123,6 +123,11 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   inc_ = Eigen::ArrayXd::Zero(options_.particles);
   const auto n = in.value<std::uint64_t>("trucks");
   if (n > 100'000'000ULL) in.fail("trucks", "implausible truck count " + std::to_string(n));
+  if (frozen_ && (frozen_until_ < static_cast<std::int64_t>(n) ||
+                  frozen_until_ > static_cast<std::int64_t>(n) + options_.freeze_max)) {
+    in.fail("frozen until", "truck " + std::to_string(frozen_until_) + " is not within a span of truck " +
+                                std::to_string(n));
+  }
   speed_mps_.clear();
   sprung_mass_kg_.clear();
   observed_if_.clear();
