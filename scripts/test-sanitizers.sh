@@ -8,7 +8,9 @@ cmake --preset asan >/dev/null
 cmake --build --preset asan -j "$(nproc)"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-# Two diagnose tests run more than their 600 s under the sanitizers (about 130-220 s in Release), so
-# they are left out here; every other test of the default suite runs sanitized.
+# Three diagnose tests run near or past their 600 s under the sanitizers (about 100-220 s in
+# Release; the 6 % gain case took 587 s sanitized on a 2-core machine), so they are left out here;
+# the diagnose code they drive still runs sanitized in the other diagnose tests, and every other
+# test of the default suite runs sanitized.
 ctest --preset asan -j "$(nproc)" \
-  -E "diagnose answers none on a 40-truck log with no effect|diagnose names two effects hidden at once"
+  -E "diagnose answers none on a 40-truck log with no effect|diagnose names two effects hidden at once|diagnose names a 6 % gain on sensor 9"
