@@ -47,6 +47,13 @@ std::string bytes_of(const fleet::MarginalSmc& smc) {
   return os.str();
 }
 
+// Restores a core from a checkpoint's bytes (bytes_of's), as a resume reads checkpoint.bin.
+void restore_from(fleet::MarginalSmc& smc, const std::string& bytes) {
+  std::istringstream is(bytes);
+  BinaryReader in(is, "checkpoint.bin");
+  smc.restore(in);
+}
+
 }  // namespace
 
 TEST_CASE("the marginal target's cached log posterior equals the tables' sum after moves, resampling and rebuilds",
@@ -140,17 +147,8 @@ TEST_CASE("tables prebuilt one truck per thread give the bits of tables built on
     first.absorb(records[t]);
     if (t >= 64 && !first.last_rebuild().empty()) ++rebuilds_after_64;
   }
-  std::ostringstream saved;
-  {
-    BinaryWriter w(saved);
-    first.save(w);
-  }
   fleet::MarginalSmc resumed(c.site, options(96, 2, 7));
-  {
-    std::istringstream is(saved.str());
-    BinaryReader in(is, "checkpoint.bin");
-    resumed.restore(in);
-  }
+  restore_from(resumed, bytes_of(first));
   for (; t < records.size(); ++t) {
     resumed.absorb(records[t]);
     if (!resumed.last_rebuild().empty()) ++rebuilds_after_64;
@@ -191,11 +189,7 @@ TEST_CASE("a marginal target of format 1 (before frozen table options) is migrat
   std::memcpy(bytes.data() + body, &seal, sizeof seal);
 
   fleet::MarginalSmc resumed(c.site, options(64, 2, 4));
-  {
-    std::istringstream is(bytes);
-    BinaryReader in(is, "checkpoint.bin");
-    resumed.restore(in);
-  }
+  restore_from(resumed, bytes);
   for (std::size_t t = 1; t < c.log.records.size(); ++t) resumed.absorb(c.log.records[t]);
   CHECK(bytes_of(resumed) == bytes_of(straight));
 }
@@ -210,11 +204,7 @@ TEST_CASE("a marginal-core checkpoint resumes bit-identically, and an old or cut
   for (int t = 0; t < 7; ++t) first.absorb(c.log.records[static_cast<std::size_t>(t)]);
   const std::string saved = bytes_of(first);
   fleet::MarginalSmc resumed(c.site, options(64, 1, 9));  // another thread count changes nothing
-  {
-    std::istringstream is(saved);
-    BinaryReader in(is, "checkpoint.bin");
-    resumed.restore(in);
-  }
+  restore_from(resumed, saved);
   for (std::size_t t = 7; t < c.log.records.size(); ++t) resumed.absorb(c.log.records[t]);
   CHECK(bytes_of(resumed) == bytes_of(straight));
 
