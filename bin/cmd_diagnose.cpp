@@ -89,10 +89,8 @@ int run_diagnose(int argc, const char* const argv[]) {
   }
   if (!posterior_path.empty()) {
     write_output(posterior_path, [&](std::ostream& os) {
-      os << io::posterior_to_json(result.posterior, fleet::summarise_cloud(result.posterior),
-                                  fleet::summarise_psi(result.posterior))
-                .dump(1)
-         << "\n";
+      os << io::posterior_file_text(io::posterior_to_json(result.posterior, fleet::summarise_cloud(result.posterior),
+                                                          fleet::summarise_psi(result.posterior)));
     });
   }
   if (!out_dir.empty()) {

@@ -78,7 +78,7 @@ int run_fit(int argc, const char* const argv[]) {
     psi.push_back(fleet::summarise_psi(cloud));
     classes.push_back({label, std::move(cloud)});
   }
-  write_output(out, [&](std::ostream& os) { os << io::posterior_classes_to_json(classes, hyper, psi).dump(1) << "\n"; });
+  write_output(out, [&](std::ostream& os) { os << io::posterior_file_text(io::posterior_classes_to_json(classes, hyper, psi)); });
   if (!quiet) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cerr << "ssrfleet fit: done in " << std::fixed << std::setprecision(1) << s << " s -> " << out << "\n";

@@ -441,6 +441,34 @@ TEST_CASE("a truncated or damaged state file is refused by name and never gives 
     CHECK(test::read_text(state + "/posterior.json") == posterior);
     write(good);
   }
+  // posterior.json, the file predict and a user's tools read: cut at every 1 KiB offset or with a
+  // digit changed (still valid JSON), predict refuses it by name (exit 65) and prints nothing.
+  {
+    const std::string path = state + "/posterior.json";
+    const auto predict = [&] { return run_ssrfleet("predict --posterior " + q(state) + " --quiet", dir); };
+    int cuts = 0, refused = 0;
+    for (std::size_t at = 0; at < posterior.size(); at += 1024) {
+      ++cuts;
+      test::write_text(path, posterior.substr(0, at));
+      const auto r = predict();
+      INFO("posterior.json cut at " << at << ": " << r.err);
+      CHECK(r.err.find("posterior.json") != std::string::npos);
+      CHECK(r.out.empty());
+      refused += r.status == 65;
+    }
+    CHECK(refused == cuts);
+    std::string damaged = posterior;
+    const std::size_t digit = damaged.find_first_of("123456789", damaged.find("\"weights\""));
+    REQUIRE(digit != std::string::npos);
+    damaged[digit] = static_cast<char>(damaged[digit] ^ 0x01);  // another digit: another weight
+    test::write_text(path, damaged);
+    const auto r = predict();
+    INFO(r.err);
+    CHECK(r.status == 65);
+    CHECK(r.err.find("checksum") != std::string::npos);
+    test::write_text(path, posterior);
+    CHECK(predict().status == 0);
+  }
   // Restored, the state resumes.
   CHECK(run_ssrfleet("stream --state " + q(state) + " --input " + q(log) + " --particles 32 --seed 3 --quiet", dir).status == 0);
 }

@@ -294,8 +294,8 @@ std::vector<std::string> write_diagnosis_files(const std::string& dir, const Dia
   // The posterior diagnose ends with, ready for predict (the chosen effect's model, or the base).
   if (r.posterior.theta.cols() > 0) {
     write("posterior.json", [&](std::ostream& os) {
-      os << io::posterior_to_json(r.posterior, fleet::summarise_cloud(r.posterior), fleet::summarise_psi(r.posterior)).dump(1)
-         << "\n";
+      os << io::posterior_file_text(
+          io::posterior_to_json(r.posterior, fleet::summarise_cloud(r.posterior), fleet::summarise_psi(r.posterior)));
     });
   }
   const auto& before = r.checks_before;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -12,6 +13,7 @@
 #include "io/atomic_file.hpp"
 #include "model/fleet_model.hpp"
 #include "records/vehicle_class.hpp"
+#include "util/binary_io.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::io {
@@ -22,7 +24,29 @@ constexpr int kClassesFormatVersion = 2;  // a file of vehicle classes
 
 // JSON has no NaN: a quantity that does not apply (MCMC log-evidence) is written as null.
 nlohmann::json number_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
+
+// The file's own checksum (issue 20 item 4): FNV-1a 64 of the compact dump of everything but
+// "checksum". The dump is canonical (object keys sorted, each double in its shortest round-trip
+// form), so a parsed file dumps to the very text its writer hashed; a changed value changes it,
+// while re-indenting the file does not.
+constexpr const char* kChecksumKey = "checksum";
+constexpr const char* kChecksumPrefix = "fnv1a64:";
+
+std::string content_checksum(nlohmann::json j) {
+  j.erase(kChecksumKey);
+  const std::string text = j.dump();
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx",
+                static_cast<unsigned long long>(detail::fnv1a(detail::kFnvOffset, text.data(), text.size())));
+  return kChecksumPrefix + std::string(hex);
+}
+
 }  // namespace
+
+std::string posterior_file_text(nlohmann::json j) {
+  j[kChecksumKey] = content_checksum(j);
+  return j.dump(1) + "\n";
+}
 
 nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vector<fleet::ParameterSummary>& hyper,
                                  const std::vector<fleet::ParameterSummary>& psi) {
@@ -83,8 +107,8 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vect
 void write_posterior_file(const std::string& path, const fleet::PosteriorCloud& cloud,
                           const std::vector<fleet::ParameterSummary>& hyper,
                           const std::vector<fleet::ParameterSummary>& psi) {
-  const nlohmann::json j = posterior_to_json(cloud, hyper, psi);
-  write_file_atomically(path, [&](std::ostream& os) { os << j.dump(1) << "\n"; });
+  const std::string text = posterior_file_text(posterior_to_json(cloud, hyper, psi));
+  write_file_atomically(path, [&](std::ostream& os) { os << text; });
 }
 
 namespace {
@@ -195,14 +219,36 @@ fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std:
   return c;
 }
 
-nlohmann::json parse_json(std::istream& in, const std::string& path) {
+// A file with a "checksum" must match it; one without (written before ssrfleet 0.x sealed its
+// files, or by hand) is read as it is. A cut file is not valid JSON, so either way damage is an
+// error naming the file, never a wrong posterior.
+void check_checksum(const nlohmann::json& j, const std::string& path) {
+  if (!j.is_object() || !j.contains(kChecksumKey)) return;
+  const nlohmann::json& stored = j.at(kChecksumKey);
+  if (!stored.is_string()) throw DataError(path, 0, kChecksumKey, "must be a string (\"fnv1a64:\" and 16 hex digits)");
+  std::string computed;
   try {
-    return nlohmann::json::parse(in);
+    computed = content_checksum(j);
+  } catch (const nlohmann::json::exception& e) {
+    throw DataError(path, 0, "json", std::string("not valid JSON (") + e.what() + ")");
+  }
+  if (stored.get<std::string>() != computed) {
+    throw DataError(path, 0, kChecksumKey,
+                    "does not match the file's contents: the file was changed or damaged after it was written");
+  }
+}
+
+nlohmann::json parse_json(std::istream& in, const std::string& path) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
   } catch (const nlohmann::json::exception& e) {
     // parse_error, and out_of_range for a number past a double ("2e4000", found by
     // fuzz/posterior_json_fuzzer: it escaped as an internal error).
     throw DataError(path, 0, "json", std::string("not valid JSON (") + e.what() + ")");
   }
+  check_checksum(j, path);
+  return j;
 }
 
 nlohmann::json parse_json_file(std::string path) {
@@ -307,8 +353,8 @@ nlohmann::json posterior_classes_to_json(const fleet::ClassPosteriors& classes,
 void write_posterior_classes_file(const std::string& path, const fleet::ClassPosteriors& classes,
                                   const std::vector<std::vector<fleet::ParameterSummary>>& hyper,
                                   const std::vector<std::vector<fleet::ParameterSummary>>& psi) {
-  const nlohmann::json j = posterior_classes_to_json(classes, hyper, psi);
-  write_file_atomically(path, [&](std::ostream& os) { os << j.dump(1) << "\n"; });
+  const std::string text = posterior_file_text(posterior_classes_to_json(classes, hyper, psi));
+  write_file_atomically(path, [&](std::ostream& os) { os << text; });
 }
 
 }  // namespace ssrfleet::io

@@ -26,6 +26,13 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& cloud,
                                  const std::vector<fleet::ParameterSummary>& hyper,
                                  const std::vector<fleet::ParameterSummary>& psi = {});
 
+// The text of a posterior file: `j` (from posterior_to_json or posterior_classes_to_json) with a
+// "checksum" member added, FNV-1a 64 of the canonical compact dump of everything else, indented.
+// Every writer of a posterior file writes this text; a reader refuses a file whose checksum does
+// not match (a DataError naming the file and the field "checksum") and reads one without a
+// checksum as it is (older files, hand-made ones).
+std::string posterior_file_text(nlohmann::json j);
+
 // Reads a posterior file, or the file `posterior.json` inside a directory (a stream's state
 // directory). Any missing or malformed field is a DataError naming the file and the field; a
 // missing file is a MissingInputError. A file of several vehicle classes is a DataError (field

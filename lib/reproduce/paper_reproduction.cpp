@@ -199,7 +199,7 @@ Result run(const Options& o) {
   res.hyper = summarise(cloud);
   // The fit's posterior, with its model, ready for predict.
   write("posterior.json", [&](std::ostream& os) {
-    os << io::posterior_to_json(cloud, fleet::summarise_cloud(cloud), fleet::summarise_psi(cloud)).dump(1) << "\n";
+    os << io::posterior_file_text(io::posterior_to_json(cloud, fleet::summarise_cloud(cloud), fleet::summarise_psi(cloud)));
   });
   for (int j = 0; j < fleet::kHyperCount; ++j) {
     res.hyper_covered += (res.truth[j] >= res.hyper[j].q025 && res.truth[j] <= res.hyper[j].q975) ? 1 : 0;
