@@ -77,6 +77,7 @@ Site::Site(road::Surface raw_surface, SiteOptions options)
   const Eigen::Index first = road::first_row_with_missing(surface_);
   if (first < surface_.samples()) measured_to_m_ = surface_.dx_m * static_cast<double>(first - 2);
   if (!integrator_.positions_m().empty()) check_measured_up_to(integrator_.positions_m().back());
+  fingerprint_ = compute_fingerprint();
 }
 
 void Site::check_measured_up_to(double x_m) const {
@@ -127,7 +128,7 @@ void Site::impact_factors_at(const vehicle::PassIntegrator& integrator, const Tr
   integrator.run_batch(cars, trucks.speed_mps, paths, if_out, min_if);
 }
 
-std::string Site::fingerprint() const {
+std::string Site::compute_fingerprint() const {
   Fnv1a f;
   f.value(surface_.dx_m);
   f.value(surface_.y0_m);

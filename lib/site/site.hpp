@@ -75,8 +75,10 @@ class Site {
 
   // A digest of everything that changes the site's predictions (surface heights and geometry,
   // sensor positions, constants), so a posterior fitted on one site is not used on another by
-  // mistake. Hex, 16 digits.
-  std::string fingerprint() const;
+  // mistake. Hex, 16 digits. Computed once, at construction: a stream asks for it at every truck
+  // (its posterior file and checkpoint name the site), and hashing a whole surface each time was a
+  // tenth of a stream's time.
+  const std::string& fingerprint() const { return fingerprint_; }
 
  private:
   // DataError unless a pass to x_m reads only measured road.
@@ -87,6 +89,9 @@ class Site {
   vehicle::PassIntegrator integrator_;
   road::MissingCells raw_missing_;  // in the raw surface, for messages
   double measured_to_m_;            // a pass may run this far and read no missing cell
+  std::string fingerprint_;
+
+  std::string compute_fingerprint() const;
 };
 
 }  // namespace ssrfleet::site

@@ -51,9 +51,10 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   lock_ = std::make_unique<StateLock>(options_.state_dir);
   const std::string checkpoint = path_in(options_.state_dir, "checkpoint.bin");
   if (fs::exists(checkpoint)) restore_checkpoint(checkpoint);
-  const bool caught_up = open_history();
-  if (resumed_ && !caught_up) {
-    // posterior.json may lag the checkpoint if the last run failed after the history's commit.
+  open_history();
+  if (resumed_ && posterior_seq_ != seq_) {
+    // posterior.json may lag the checkpoint: the last run failed after the history's commit, or
+    // ended between two of its writes (posterior_due).
     write_posterior(cores_.posteriors());
   }
   if (resumed_ && progress_) {
@@ -110,8 +111,8 @@ void WimStream::restore_checkpoint(const std::string& checkpoint) {
 
 // The history must end at this checkpoint, or one short of it (a failure between the checkpoint's
 // rename and the history's commit): then the missing row set is written now, from the restored
-// cloud, exactly as the interrupted run would have written it (and posterior.json with it: true).
-bool WimStream::open_history() {
+// cloud, exactly as the interrupted run would have written it.
+void WimStream::open_history() {
   history_ = std::make_unique<io::HistoryDb>(path_in(options_.state_dir, "history.sqlite"), model_text());
   const std::uint64_t have = history_->last_seq().value_or(0);
   if (have == seq_) {
@@ -120,12 +121,12 @@ bool WimStream::open_history() {
                       "report " + std::to_string(seq_) + " names another checkpoint.bin than the one in the state "
                       "directory: history and checkpoint disagree");
     }
-    return false;
+    return;
   }
   if (have + 1 == seq_) {
     if (have > 0) history_->read_report(have);  // its checksum, before building on it
     write_history_and_posterior(checkpoint_source_, checkpoint_lines_);
-    return true;
+    return;
   }
   throw DataError(history_->path(), 0, "seq",
                   "the history ends at report " + std::to_string(have) + " but the checkpoint is number " +
@@ -161,10 +162,18 @@ void WimStream::write_history_and_posterior(const std::string& source, std::size
   const HistoryRowsInput row{.seq = seq_, .source = source, .lines_consumed = lines_consumed,
                              .checkpoint_checksum = checkpoint_checksum_};
   history_->append(history_rows(classes, site_, options_.history_prediction, row));
-  write_posterior(classes);
+  if (posterior_due(cores_.trucks_seen(), options_.posterior_every_truck_up_to)) write_posterior(classes);
 }
 
-void WimStream::write_posterior(const fleet::ClassPosteriors& classes) const {
+bool posterior_due(long trucks, long every_up_to) {
+  if (trucks <= every_up_to || every_up_to <= 0) return true;
+  long interval = 1;
+  while (interval * 2 <= trucks / every_up_to) interval *= 2;
+  return trucks % interval == 0;
+}
+
+void WimStream::write_posterior(const fleet::ClassPosteriors& classes) {
+  posterior_seq_ = seq_;
   std::vector<std::vector<fleet::ParameterSummary>> hyper, psi;
   for (const auto& c : classes) {
     hyper.push_back(fleet::summarise_cloud(c.cloud));
@@ -263,6 +272,8 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
     }
     if (options_.report_every > 0 && cores_.trucks_seen() % options_.report_every == 0) report();
   }
+  // The last checkpoint's posterior.json, if its turn had not come (posterior_due).
+  if (seq_ > 0 && posterior_seq_ != seq_) write_posterior(cores_.posteriors());
   report();
   counts.total_absorbed = cores_.trucks_seen();
   return counts;
