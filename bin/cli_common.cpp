@@ -9,17 +9,20 @@
 #include <sstream>
 
 #include "io/atomic_file.hpp"
+#include "site/road_source.hpp"
 #include "smc/engine.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::cli {
 
-void SiteFlags::add_to(po::options_description& desc) {
+void SiteFlags::add_to(po::options_description& desc, bool with_sensors) {
   desc.add_options()
       ("envelopment", po::value(&envelopment_m)->default_value(envelopment_m, shortest_text(envelopment_m)),
-       "tyre envelopment: moving-average base length along travel (m); 0 = off")
-      ("sensors", po::value(&sensors)->default_value(sensors),
-       "sensor array as FIRST_M,SPACING_M,COUNT")
+       "tyre envelopment: moving-average base length along travel (m); 0 = off");
+  if (with_sensors) {
+    desc.add_options()("sensors", po::value(&sensors)->default_value(sensors), "sensor array as FIRST_M,SPACING_M,COUNT");
+  }
+  desc.add_options()
       ("m1", po::value(&m1_kg)->default_value(m1_kg), "unsprung mass m1 (kg)")
       ("cb", po::value(&cb_nspm)->default_value(cb_nspm), "suspension damping c_b (N s/m)")
       ("ct", po::value(&ct_nspm)->default_value(ct_nspm), "tyre damping c_t (N s/m); 0 in the paper");
@@ -113,6 +116,46 @@ std::vector<records::WimRecord> read_site_log(const std::string& path, const sit
                         std::to_string(site.sensors()) + " (--sensors " + flags.sensors + ")");
   }
   return records;
+}
+
+site::Site site_of_manifest_entry(const io::SiteManifest& manifest, const io::ManifestSite& entry, SiteFlags& flags,
+                                  std::ostream* warnings) {
+  const std::string who = "site '" + entry.name + "': ";
+  const auto fail = [&](const std::string& key, const std::string& what) {
+    throw DataError(manifest.path, 0, io::SiteManifest::field(entry, key), who + what);
+  };
+  flags.sensors = entry.sensors;
+  site::SiteOptions options;
+  try {
+    options = flags.to_options();
+  } catch (const UsageError& e) {
+    fail("sensors", e.what());
+  }
+  road::Surface surface;
+  try {
+    surface = site::load_road(entry.road, warnings);
+  } catch (const std::runtime_error& e) {  // DataError (the road file's own fault), UsageError, MissingInputError
+    fail("road", e.what());
+  }
+  try {
+    return site::Site(std::move(surface), options);
+  } catch (const UsageError& e) {  // a sensor beyond the road's end
+    fail("sensors", e.what());
+  } catch (const DataError& e) {  // missing cells under the trucks' stretch
+    fail("road", e.what());
+  }
+  throw std::logic_error("site_of_manifest_entry: unreachable");
+}
+
+std::vector<records::WimRecord> read_manifest_site_log(const io::SiteManifest& manifest, const io::ManifestSite& entry,
+                                                       const site::Site& site, const SiteFlags& flags,
+                                                       const io::WimLimits& limits) {
+  try {
+    return read_site_log(entry.log, site, flags, limits);
+  } catch (const DataError& e) {
+    throw DataError(e.file(), e.line(), e.field(),
+                    "site '" + entry.name + "' of manifest '" + manifest.path + "': " + e.reason());
+  }
 }
 
 // "76,77.5,80" or "FIRST:STEP:LAST" (inclusive, e.g. 76:0.05:98.5).

@@ -11,6 +11,7 @@
 
 #include "fleet/posterior_cloud.hpp"
 #include "fleet/vehicle_classes.hpp"
+#include "io/site_manifest.hpp"
 #include "io/wim_log.hpp"
 #include "site/site.hpp"
 
@@ -26,7 +27,8 @@ struct SiteFlags {
   double cb_nspm = 20e3;
   double ct_nspm = 0.0;
 
-  void add_to(po::options_description& desc);
+  // with_sensors = false: the vehicle constants only (a manifest's sites bring their own sensors).
+  void add_to(po::options_description& desc, bool with_sensors = true);
   site::SiteOptions to_options() const;  // UsageError on a malformed --sensors
 };
 
@@ -52,6 +54,19 @@ std::uint64_t parse_seed(const std::string& text, const std::string& option = "-
 // limits: what a record may hold (e.g. fhwa_classes).
 std::vector<records::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags,
                                               const io::WimLimits& limits = {});
+
+// A site of a manifest (io/site_manifest.hpp): its road and --sensors from the entry, the vehicle
+// constants from `flags` (they belong to the fleet). Any problem with the entry (a road that cannot
+// be read, a malformed sensor array, a road that does not cover its sensors) is a DataError naming
+// the manifest, the field ("sites[1].sensors") and the site. `flags` comes back with the entry's
+// sensors in it (for read_manifest_site_log).
+site::Site site_of_manifest_entry(const io::SiteManifest& manifest, const io::ManifestSite& entry, SiteFlags& flags,
+                                  std::ostream* warnings);
+// read_site_log for a manifest's site: the same errors (file, line, field), each reason starting
+// with the site and the manifest.
+std::vector<records::WimRecord> read_manifest_site_log(const io::SiteManifest& manifest, const io::ManifestSite& entry,
+                                                       const site::Site& site, const SiteFlags& flags,
+                                                       const io::WimLimits& limits = {});
 
 // Positions along the road: "76,77.5,80" or "FIRST:STEP:LAST" (inclusive, e.g. 76:0.05:98.5);
 // "" = none (the caller's default). UsageError naming --positions when malformed.

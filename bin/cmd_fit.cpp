@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <string>
 
 #include "cli_common.hpp"
@@ -20,14 +21,17 @@
 namespace ssrfleet::cli {
 
 int run_fit(int argc, const char* const argv[]) {
-  std::string log_path, road = "AS1", out = "posterior.json", seed_text = "1", method = "smc";
+  std::string log_path, road = "AS1", out = "posterior.json", seed_text = "1", method = "smc", manifest_path, site_name;
   FitFlags fit;
   bool quiet = false, fhwa = false;
   SiteFlags site_flags;
   po::options_description desc("fit options");
   desc.add_options()
       ("help,h", "show this help")
-      ("log", po::value(&log_path)->required(), "WIM log (CSV) to replay")
+      ("log", po::value(&log_path), "WIM log (CSV) to replay")
+      ("sites", po::value(&manifest_path),
+       "a site manifest (JSON: each site's name, road, sensors and log); with --site, fit that site alone")
+      ("site", po::value(&site_name), "the manifest's site to fit (its log, road and sensors from the manifest)")
       ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
       ("out,o", po::value(&out)->default_value(out), "posterior file to write (JSON)")
       ("method", po::value(&method)->default_value(method), "smc (sequential, default) or mcmc (the paper's batch baseline)")
@@ -41,7 +45,8 @@ int run_fit(int argc, const char* const argv[]) {
   positional.add("log", 1);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, &positional, vm,
-                     "usage: ssrfleet fit LOG [--road AS1|FILE] [--model SPEC] [--out posterior.json] [--particles P] [--seed K]")) {
+                     "usage: ssrfleet fit LOG [--road AS1|FILE] [--model SPEC] [--out posterior.json] [--particles P] [--seed K]\n"
+                     "       ssrfleet fit --sites MANIFEST --site NAME [...]")) {
     return 0;
   }
   check_particles(fit.particles);
@@ -51,11 +56,34 @@ int run_fit(int argc, const char* const argv[]) {
   const std::uint64_t seed = parse_seed(seed_text);
   if (method != "smc" && method != "mcmc") throw UsageError("--method '" + method + "': must be smc or mcmc");
 
-  const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
-  const fleet::ModelSpec model = fleet::parse_model_spec(fit.model, site);
   io::WimLimits limits;
   limits.fhwa_classes = fhwa;
-  const auto records = read_site_log(log_path, site, site_flags, limits);
+  // A site of a manifest brings its own log, road and sensors; the vehicle constants stay options.
+  std::optional<io::SiteManifest> manifest;
+  const io::ManifestSite* entry = nullptr;
+  if (!manifest_path.empty()) {
+    for (const char* own : {"log", "road", "sensors"}) {
+      if (vm.count(own) && !vm[own].defaulted()) {
+        throw UsageError(std::string("--") + own + " with --sites: a manifest's site brings its own log, road and sensors");
+      }
+    }
+    if (site_name.empty()) {
+      throw UsageError("--sites needs --site NAME: the joint fit of all a manifest's sites at once is not available yet; "
+                       "fit each site alone (scripts/fit-sites.sh runs them all and collects their posteriors)");
+    }
+    manifest = io::read_site_manifest(manifest_path);
+    entry = &manifest->find(site_name);
+    log_path = entry->log;
+  } else if (!site_name.empty()) {
+    throw UsageError("--site names a site of a manifest: give the manifest with --sites");
+  } else if (log_path.empty()) {
+    throw UsageError("fit needs a WIM log: LOG, or --sites MANIFEST --site NAME (see --help)");
+  }
+  const site::Site site = entry != nullptr ? site_of_manifest_entry(*manifest, *entry, site_flags, &std::cerr)
+                                           : site::Site(site::load_road(road, &std::cerr), site_flags.to_options());
+  const fleet::ModelSpec model = fleet::parse_model_spec(fit.model, site);
+  const auto records = entry != nullptr ? read_manifest_site_log(*manifest, *entry, site, site_flags, limits)
+                                        : read_site_log(log_path, site, site_flags, limits);
   if (!quiet) {
     std::cerr << "ssrfleet fit: " << records.size() << " trucks from " << log_path << ", road " << site.surface().name
               << ", method " << method << ", model " << model.text << ", seed " << seed << "\n";

@@ -28,6 +28,7 @@ const std::map<std::string, Command>& commands() {
       {"diagnose", {ssrfleet::cli::run_diagnose, "find, name and fit the effect the model misses (checks, extensions, Bayes factors)"}},
       {"damage", {ssrfleet::cli::run_damage, "damage along the road: fourth-power amplification, DLC, hot spots, ESAL per million trucks"}},
       {"weigh", {ssrfleet::cli::run_weigh, "SSR-corrected static wheel loads from a log of raw tyre forces"}},
+      {"sites", {ssrfleet::cli::run_sites, "check a site manifest, list its sites, collect their posteriors into one table"}},
       {"reproduce", {ssrfleet::cli::run_reproduce, "the paper's theoretical test end to end: figure data, plots, summary.md"}},
   };
   return table;

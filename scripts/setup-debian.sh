@@ -2,7 +2,7 @@
 # Installs every build, test and plotting dependency of ssrfleet on Debian 12. Idempotent.
 set -euo pipefail
 packages=(build-essential cmake git libeigen3-dev libboost-dev libboost-program-options-dev
-          catch2 nlohmann-json3-dev libsqlite3-dev sqlite3 gnuplot-nox)
+          catch2 nlohmann-json3-dev libsqlite3-dev sqlite3 gnuplot-nox parallel)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

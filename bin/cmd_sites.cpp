@@ -1,0 +1,104 @@
+// ssrfleet sites: a site manifest (io/site_manifest.hpp) checked and listed, its names for scripts,
+// and the posteriors of its sites, fitted one by one (scripts/fit-sites.sh, a Slurm job array),
+// collected into one table.
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "fleet/posterior_summary.hpp"
+#include "io/posterior_json.hpp"
+#include "io/site_manifest.hpp"
+#include "model/fleet_model.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::cli {
+
+namespace {
+
+// One row per site: each site built (its road covers its sensors) and its log read whole.
+// Returns the table; nothing is written unless every site passes.
+std::string check_and_list(const io::SiteManifest& manifest, const SiteFlags& flags, bool quiet) {
+  std::ostringstream out;
+  out << "site,road,sensors,trucks,log\n";
+  for (const auto& entry : manifest.sites) {
+    SiteFlags own = flags;
+    const site::Site site = site_of_manifest_entry(manifest, entry, own, quiet ? nullptr : &std::cerr);
+    const auto records = read_manifest_site_log(manifest, entry, site, own);
+    out << entry.name << "," << entry.road << ",\"" << entry.sensors << "\"," << records.size() << "," << entry.log
+        << "\n";
+  }
+  return out.str();
+}
+
+// The summaries of every site's posterior DIR/NAME.json, one row per site, class and parameter.
+// A posterior fitted on another site than its manifest entry (another road, sensor array or vehicle
+// constants) is refused by name: a table that mixed sites up would be worse than none.
+std::string collect(const io::SiteManifest& manifest, const SiteFlags& flags, const std::string& dir) {
+  std::ostringstream out;
+  out << "site,class,trucks,parameter,mean,sd,q025,q975\n";
+  out << std::setprecision(10);
+  for (const auto& entry : manifest.sites) {
+    const std::string path = (std::filesystem::path(dir) / (entry.name + ".json")).string();
+    if (!std::filesystem::exists(path)) {
+      throw MissingInputError("site '" + entry.name + "': no posterior '" + path + "' (fit it with: ssrfleet fit --sites " +
+                              manifest.path + " --site " + entry.name + " --out " + path + ")");
+    }
+    SiteFlags own = flags;
+    const site::Site site = site_of_manifest_entry(manifest, entry, own, nullptr);
+    for (const auto& [label, cloud] : io::read_posterior_classes(path)) {
+      require_fitted_site(cloud, path, site,
+                          " (site '" + entry.name + "' of manifest '" + manifest.path +
+                              "'; refit it, with the same --m1, --cb, --ct and --envelopment as here)");
+      const auto hyper = fleet::summarise_cloud(cloud);
+      const auto psi = fleet::summarise_psi(cloud);
+      const auto row = [&](const std::string& name, const fleet::ParameterSummary& s) {
+        out << entry.name << "," << label << "," << cloud.trucks_seen << "," << name << "," << s.mean << "," << s.sd << ","
+            << s.q025 << "," << s.q975 << "\n";
+      };
+      for (std::size_t h = 0; h < hyper.size(); ++h) row(std::string(fleet::kHyperNames[h]), hyper[h]);
+      for (std::size_t k = 0; k < psi.size(); ++k) row(cloud.psi_names[k], psi[k]);
+    }
+  }
+  return out.str();
+}
+
+}  // namespace
+
+int run_sites(int argc, const char* const argv[]) {
+  std::string manifest_path, collect_dir, out = "-";
+  bool names = false, quiet = false;
+  SiteFlags flags;
+  po::options_description desc("sites options");
+  desc.add_options()
+      ("help,h", "show this help")
+      ("manifest", po::value(&manifest_path)->required(), "the site manifest (JSON)")
+      ("names", po::bool_switch(&names), "print the sites' names, one per line, and nothing else (for scripts)")
+      ("collect", po::value(&collect_dir),
+       "read each site's posterior DIR/NAME.json (fit alone) and write their summaries as one CSV table")
+      ("out,o", po::value(&out)->default_value(out), "where the table goes ('-' = standard output)")
+      ("quiet,q", po::bool_switch(&quiet), "no warnings about the roads on standard error");
+  flags.add_to(desc, /*with_sensors=*/false);
+  po::positional_options_description positional;
+  positional.add("manifest", 1);
+  po::variables_map vm;
+  if (!parse_or_help(argc, argv, desc, &positional, vm,
+                     "usage: ssrfleet sites MANIFEST [--names | --collect DIR] [--out FILE]\n"
+                     "  without --names or --collect: checks every site (road, sensors, log) and lists them")) {
+    return 0;
+  }
+  if (names && !collect_dir.empty()) throw UsageError("give --names or --collect, not both");
+  const io::SiteManifest manifest = io::read_site_manifest(manifest_path);
+  if (names) {
+    for (const auto& s : manifest.sites) std::cout << s.name << "\n";
+    return 0;
+  }
+  const std::string table = collect_dir.empty() ? check_and_list(manifest, flags, quiet) : collect(manifest, flags, collect_dir);
+  write_output(out, [&](std::ostream& os) { os << table; });
+  return 0;
+}
+
+}  // namespace ssrfleet::cli

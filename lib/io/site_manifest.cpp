@@ -1,0 +1,112 @@
+#include "io/site_manifest.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include <nlohmann/json.hpp>
+
+#include "records/vehicle_class.hpp"
+#include "road/surface_presets.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::io {
+
+namespace fs = std::filesystem;
+
+namespace {
+constexpr const char* kSiteKeys[] = {"name", "road", "sensors", "log"};
+
+std::string resolve(const std::string& folder, const std::string& path) {
+  const fs::path p(path);
+  return p.is_absolute() || folder.empty() ? path : (fs::path(folder) / p).lexically_normal().string();
+}
+
+std::string quoted_keys() {
+  std::string s;
+  for (const char* k : kSiteKeys) s += std::string(s.empty() ? "" : ", ") + k;
+  return s;
+}
+}  // namespace
+
+std::string SiteManifest::field(const ManifestSite& site, const std::string& key) {
+  return "sites[" + std::to_string(site.index) + "]." + key;
+}
+
+const ManifestSite& SiteManifest::find(const std::string& name) const {
+  std::string names;
+  for (const auto& s : sites) {
+    if (s.name == name) return s;
+    names += (names.empty() ? "" : ", ") + s.name;
+  }
+  throw UsageError("--site '" + name + "': the manifest '" + path + "' has no such site (it has " + names + ")");
+}
+
+SiteManifest read_site_manifest(std::istream& in, const std::string& path, const std::string& folder) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw DataError(path, 0, "json", std::string("not valid JSON (") + e.what() + ")");
+  }
+  if (!j.is_object()) throw DataError(path, 0, "json", "must be an object {\"sites\": [...]}");
+  for (const auto& [key, value] : j.items()) {
+    if (key != "sites") throw DataError(path, 0, key, "unknown key (a manifest has one key, \"sites\")");
+  }
+  if (!j.contains("sites")) throw DataError(path, 0, "sites", "missing");
+  const auto& list = j["sites"];
+  if (!list.is_array() || list.empty()) throw DataError(path, 0, "sites", "must be a non-empty array of sites");
+
+  SiteManifest m;
+  m.path = path;
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    ManifestSite s;
+    s.index = i;
+    const std::string at = "sites[" + std::to_string(i) + "]";
+    const auto& e = list[i];
+    if (!e.is_object()) throw DataError(path, 0, at, "must be an object with " + quoted_keys());
+    // The name first, so every later message can name the site.
+    const auto text = [&](const char* key) -> std::string {
+      const std::string who = s.name.empty() ? "" : "site '" + s.name + "': ";
+      if (!e.contains(key)) throw DataError(path, 0, at + "." + key, who + "missing (a site has " + quoted_keys() + ")");
+      if (!e[key].is_string() || e[key].get<std::string>().empty()) {
+        throw DataError(path, 0, at + "." + key, who + "must be a non-empty string");
+      }
+      return e[key].get<std::string>();
+    };
+    s.name = text("name");
+    if (!records::is_class_label(s.name)) {
+      throw DataError(path, 0, at + ".name", "'" + s.name + "' is not a site name (one or more of A-Z a-z 0-9 _ . -)");
+    }
+    if (!names.insert(s.name).second) throw DataError(path, 0, at + ".name", "site '" + s.name + "' appears twice");
+    for (const auto& [key, value] : e.items()) {
+      if (std::find(std::begin(kSiteKeys), std::end(kSiteKeys), key) == std::end(kSiteKeys)) {
+        throw DataError(path, 0, at + "." + key, "site '" + s.name + "': unknown key (a site has " + quoted_keys() + ")");
+      }
+    }
+    const std::string road = text("road");
+    s.road = road::is_preset_name(road) ? road : resolve(folder, road);
+    if (!road::is_preset_name(road) && !fs::is_regular_file(s.road)) {
+      throw DataError(path, 0, at + ".road",
+                      "site '" + s.name + "': no road file '" + s.road + "' (a preset AS1, AS2, AS3 or a road file, "
+                      "relative to the manifest's folder)");
+    }
+    s.sensors = text("sensors");
+    s.log = resolve(folder, text("log"));
+    if (!fs::is_regular_file(s.log)) {
+      throw DataError(path, 0, at + ".log",
+                      "site '" + s.name + "': no log file '" + s.log + "' (paths are relative to the manifest's folder)");
+    }
+    m.sites.push_back(std::move(s));
+  }
+  return m;
+}
+
+SiteManifest read_site_manifest(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw MissingInputError("cannot open site manifest '" + path + "'");
+  return read_site_manifest(in, path, fs::path(path).parent_path().string());
+}
+
+}  // namespace ssrfleet::io

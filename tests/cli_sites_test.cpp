@@ -1,0 +1,177 @@
+// Many sites fitted one by one (issue 21 items 5 and 6): `fit --sites M --site NAME`, `sites`
+// (check, --names, --collect), scripts/fit-sites.sh (GNU parallel) and scripts/fit-sites.sbatch
+// (a Slurm array task), and a bad manifest entry named by manifest, site and field.
+#include <cstdlib>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include <catch2/catch.hpp>
+
+#include "fleet/posterior_summary.hpp"
+#include "io/csv_reader.hpp"
+#include "io/posterior_json.hpp"
+#include "model/fleet_model.hpp"
+#include "test_support.hpp"
+
+using namespace ssrfleet;
+using test::run_ssrfleet;
+
+namespace {
+std::string q(const std::string& p) { return "'" + p + "'"; }
+
+// Two sites on different roads and sensor arrays, 24 trucks each.
+struct TwoSites {
+  test::TempDir dir;
+  std::string manifest = dir.file("m.json");
+  TwoSites() {
+    REQUIRE(run_ssrfleet("simulate --road AS1 --trucks 24 --seed 3 --quiet --out " + q(dir.file("a.csv")), dir).status == 0);
+    REQUIRE(run_ssrfleet("simulate --road AS2 --sensors 70,2,8 --trucks 24 --seed 4 --quiet --out " + q(dir.file("b.csv")), dir)
+                .status == 0);
+    write_manifest("76,1.5,16");
+  }
+  void write_manifest(const std::string& north_sensors) const {
+    test::write_text(manifest, R"({"sites": [
+        {"name": "north", "road": "AS1", "sensors": ")" + north_sensors + R"(", "log": "a.csv"},
+        {"name": "south", "road": "AS2", "sensors": "70,2,8", "log": "b.csv"}]})");
+  }
+};
+
+// Runs a script of the repository with `env` before it; its exit status and its stderr.
+test::RunResult run_script(const std::string& env, const std::string& script, const std::string& args,
+                           const test::TempDir& dir) {
+  const std::string err = dir.file("script-stderr.txt");
+  const std::string cmd = env + " SSRFLEET=" + q(SSRFLEET_BINARY) + " bash " + q(std::string(SSRFLEET_SOURCE_DIR) + "/" + script) +
+                          " " + args + " >/dev/null 2>" + q(err) + " </dev/null";
+  const int raw = std::system(cmd.c_str());
+  test::RunResult r;
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  r.err = test::read_text(err);
+  return r;
+}
+}  // namespace
+
+TEST_CASE("fit --sites M --site NAME gives the very posterior of fit with that site's log, road and sensors",
+          "[cli][sites]") {
+  TwoSites s;
+  const auto via_manifest = run_ssrfleet("fit --sites " + q(s.manifest) + " --site south --particles 64 --seed 3 --quiet --out " +
+                                             q(s.dir.file("m-south.json")),
+                                         s.dir);
+  INFO(via_manifest.err);
+  REQUIRE(via_manifest.status == 0);
+  REQUIRE(run_ssrfleet("fit " + q(s.dir.file("b.csv")) + " --road AS2 --sensors 70,2,8 --particles 64 --seed 3 --quiet --out " +
+                           q(s.dir.file("plain-south.json")),
+                       s.dir)
+              .status == 0);
+  CHECK(test::read_text(s.dir.file("m-south.json")) == test::read_text(s.dir.file("plain-south.json")));
+  CHECK(io::read_posterior_file(s.dir.file("m-south.json")).sensors == 8);
+
+  // Options that do not go together, each a usage error that says why.
+  const auto usage = [&](const std::string& args, const std::string& says) {
+    const auto r = run_ssrfleet("fit " + args + " --particles 64 --quiet --out " + q(s.dir.file("x.json")), s.dir);
+    INFO(args << ": " << r.err);
+    CHECK(r.status == 64);
+    CHECK(r.err.find(says) != std::string::npos);
+  };
+  usage("--sites " + q(s.manifest), "--site NAME");
+  usage("--site south", "--sites");
+  usage("--sites " + q(s.manifest) + " --site south --road AS1", "--road with --sites");
+  usage("--sites " + q(s.manifest) + " --site east", "north, south");
+  usage("", "LOG, or --sites");
+}
+
+TEST_CASE("a manifest's site whose road does not cover its sensors, or whose log has other sensors, is named",
+          "[cli][sites]") {
+  TwoSites s;
+  // 40 sensors from 76 m at 1.5 m end at 134.5 m, past AS1's end.
+  s.write_manifest("76,1.5,40");
+  for (const std::string& command : {"sites " + q(s.manifest), "fit --sites " + q(s.manifest) + " --site north --quiet"}) {
+    const auto r = run_ssrfleet(command, s.dir);
+    INFO(command << ": " << r.err);
+    CHECK(r.status == 65);
+    CHECK(r.err.find(s.manifest) != std::string::npos);
+    CHECK(r.err.find("sites[0].sensors") != std::string::npos);
+    CHECK(r.err.find("site 'north'") != std::string::npos);
+    CHECK(r.err.find("beyond the road's end") != std::string::npos);
+    CHECK(r.out.empty());  // no table of the sites that did pass
+  }
+  // A sensor array the road covers, but the log has 16 sensors and the manifest says 8.
+  s.write_manifest("76,1.5,8");
+  const auto r = run_ssrfleet("sites " + q(s.manifest), s.dir);
+  INFO(r.err);
+  CHECK(r.status == 65);
+  CHECK(r.err.find(s.dir.file("a.csv")) != std::string::npos);  // the log, with its line and field
+  CHECK(r.err.find("if_16") != std::string::npos);
+  CHECK(r.err.find("site 'north' of manifest '" + s.manifest + "'") != std::string::npos);
+  // A malformed sensor array.
+  s.write_manifest("76;1.5;16");
+  const auto bad = run_ssrfleet("sites " + q(s.manifest), s.dir);
+  CHECK(bad.status == 65);
+  CHECK(bad.err.find("sites[0].sensors") != std::string::npos);
+}
+
+TEST_CASE("scripts/fit-sites.sh fits every site alone with GNU parallel and collects one table; a Slurm task fits one",
+          "[cli][sites]") {
+  TwoSites s;
+  const std::string out = s.dir.file("out");
+  const auto run = run_script("JOBS=2 THREADS=1", "scripts/fit-sites.sh", q(s.manifest) + " " + q(out) + " --particles 64 --seed 3",
+                              s.dir);
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  // The table: one row per site and hyperparameter, each the summary of that site's posterior file.
+  std::istringstream table(test::read_text(out + "/sites.csv"));
+  io::CsvReader csv(table, out + "/sites.csv");
+  io::CsvRow row;
+  REQUIRE(csv.next(row));
+  const std::vector<std::string> header = row.fields;
+  const auto column = [&](const char* name) {
+    const long c = io::column_index(header, name);
+    REQUIRE(c >= 0);
+    return static_cast<std::size_t>(c);
+  };
+  std::map<std::string, int> rows;
+  while (csv.next(row)) {
+    const std::vector<std::string>& f = row.fields;
+    const std::string site = f[column("site")];
+    const auto cloud = io::read_posterior_file(out + "/" + site + ".json");
+    const auto summary = fleet::summarise_cloud(cloud);
+    const std::string name = f[column("parameter")];
+    const int h = rows[site]++;
+    REQUIRE(h < fleet::kHyperCount);
+    CHECK(name == fleet::kHyperNames[static_cast<std::size_t>(h)]);
+    CHECK(std::stol(f[column("trucks")]) == 24);
+    CHECK(std::stod(f[column("mean")]) == Approx(summary[static_cast<std::size_t>(h)].mean).epsilon(1e-9));
+    CHECK(std::stod(f[column("q975")]) == Approx(summary[static_cast<std::size_t>(h)].q975).epsilon(1e-9));
+  }
+  CHECK(rows == std::map<std::string, int>{{"north", fleet::kHyperCount}, {"south", fleet::kHyperCount}});
+  // The two sites' fleets are fitted on their own roads: AS2's posterior is not AS1's.
+  CHECK(io::read_posterior_file(out + "/south.json").road_name == "AS2");
+
+  // Slurm: array task 1 is the second site, the same posterior bits as the parallel run's.
+  const std::string out2 = s.dir.file("out2");
+  const auto task = run_script("SLURM_ARRAY_TASK_ID=1 SLURM_CPUS_PER_TASK=2", "scripts/fit-sites.sbatch",
+                               q(s.manifest) + " " + q(out2) + " --particles 64 --seed 3 --quiet", s.dir);
+  INFO(task.err);
+  REQUIRE(task.status == 0);
+  CHECK(test::read_text(out2 + "/south.json") == test::read_text(out + "/south.json"));
+  CHECK_FALSE(std::filesystem::exists(out2 + "/north.json"));
+  CHECK(run_script("SLURM_ARRAY_TASK_ID=2", "scripts/fit-sites.sbatch", q(s.manifest) + " " + q(out2), s.dir).status == 64);
+
+  // A posterior of another site under a site's name is refused by --collect, naming the site.
+  std::filesystem::copy_file(out + "/north.json", out + "/south.json", std::filesystem::copy_options::overwrite_existing);
+  const auto mixed = run_ssrfleet("sites " + q(s.manifest) + " --collect " + q(out), s.dir);
+  CHECK(mixed.status == 64);
+  CHECK(mixed.err.find("site 'south'") != std::string::npos);
+  std::filesystem::remove(out + "/south.json");
+  const auto missing = run_ssrfleet("sites " + q(s.manifest) + " --collect " + q(out), s.dir);
+  CHECK(missing.status == 66);
+  CHECK(missing.err.find("--site south") != std::string::npos);  // how to make it
+
+  // A bad entry stops the script before any fit runs.
+  s.write_manifest("76,1.5,40");
+  const std::string out3 = s.dir.file("out3");
+  const auto refused = run_script("JOBS=1", "scripts/fit-sites.sh", q(s.manifest) + " " + q(out3) + " --particles 64", s.dir);
+  CHECK(refused.status == 65);
+  CHECK(refused.err.find("sites[0].sensors") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(out3 + "/south.json"));
+}
