@@ -34,12 +34,9 @@ stream::StreamOptions small_stream(const std::string& state) {
 }
 
 // Streams the whole log into `state`; an IoError (the injected full disk) propagates.
-// posterior_every: StreamOptions::posterior_every_truck_up_to.
-void stream_log(const site::Site& site, const std::string& state, const std::string& log, long posterior_every = 1000) {
+void stream_log(const site::Site& site, const std::string& state, const std::string& log) {
   std::ostringstream reports;
-  stream::StreamOptions o = small_stream(state);
-  o.posterior_every_truck_up_to = posterior_every;
-  stream::WimStream s(site, o, nullptr, reports);
+  stream::WimStream s(site, small_stream(state), nullptr, reports);
   std::ifstream in(log);
   const std::atomic<bool> stop{false};
   s.run(in, log, stop);
@@ -74,9 +71,8 @@ struct FaultCase {
   test::TempDir dir;
   std::string log = dir.file("log.csv");
   site::Site site{site::load_road("AS1"), site::SiteOptions{}};
-  explicit FaultCase(int trucks = 4) {
-    REQUIRE(test::run_ssrfleet("simulate --trucks " + std::to_string(trucks) + " --seed 8 --quiet --out " + q(log), dir)
-                .status == 0);
+  FaultCase() {
+    REQUIRE(test::run_ssrfleet("simulate --trucks 4 --seed 8 --quiet --out " + q(log), dir).status == 0);
     // One bad record, so the rejects list is among the writes that fail.
     std::string text = test::read_text(log);
     text.insert(text.find("\nT0003") + 1, "BAD1,oops,4000,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1\n");
@@ -84,70 +80,38 @@ struct FaultCase {
   }
 };
 
-// Fails each write of streaming c.log in turn, resumes once space is back, and checks that the
-// state ends as an uninterrupted run's; returns the number of writes.
-int fail_each_write_and_resume(FaultCase& c, long posterior_every) {
+}  // namespace
+
+TEST_CASE("a full disk at any one write of the stream's state leaves it resumable to the exact posterior and history",
+          "[stream][faults]") {
+  FaultCase c;
   const std::string reference = c.dir.file("reference");
   io::arm_write_fault(0);
-  stream_log(c.site, reference, c.log, posterior_every);
+  stream_log(c.site, reference, c.log);
   const int writes = io::write_operations_seen();
+  // Per truck: the truck log (an append, or the whole log after a table rebuild), the checkpoint,
+  // the history, posterior.json; and the rejected record.
+  REQUIRE(writes == 4 * 4 + 1);
   for (int k = 1; k <= writes; ++k) {
     INFO("the write that fails: " << k << " of " << writes);
     const std::string state = c.dir.file("state" + std::to_string(k));
     io::arm_write_fault(k);
     bool failed = false;
     try {
-      stream_log(c.site, state, c.log, posterior_every);
+      stream_log(c.site, state, c.log);
     } catch (const IoError& e) {
       failed = std::string(e.what()).find("No space left on device") != std::string::npos;
     }
     io::disarm_write_fault();
     REQUIRE(failed);
     // Space is back: the resume finishes the log.
-    stream_log(c.site, state, c.log, posterior_every);
+    stream_log(c.site, state, c.log);
     CHECK(test::read_text(state + "/posterior.json") == test::read_text(reference + "/posterior.json"));
     CHECK(test::read_text(state + "/rejects.csv") == test::read_text(reference + "/rejects.csv"));
     CHECK(test::read_text(state + "/trucks.bin") == test::read_text(reference + "/trucks.bin"));
     CHECK_FALSE(std::filesystem::exists(state + "/trucks.bin.next"));
     check_same_history(state, reference);
   }
-  return writes;
-}
-
-}  // namespace
-
-TEST_CASE("a full disk at any one write of the stream's state leaves it resumable to the exact posterior and history",
-          "[stream][faults]") {
-  FaultCase c;
-  // Per truck: the truck log (an append, or the whole log after a table rebuild), the checkpoint,
-  // the history, posterior.json; and the rejected record.
-  CHECK(fail_each_write_and_resume(c, 1000) == 4 * 4 + 1);
-}
-
-TEST_CASE("posterior.json is written at every truck up to a count, then at doubling intervals and at the end of a run",
-          "[stream][faults]") {
-  // The schedule: every truck up to 1,000, then every 2^k trucks with 2^k <= trucks / 1,000, so
-  // posterior.json is never more than trucks / 1,000 trucks behind and a 100,000-truck stream
-  // writes it 7,600 times instead of 100,000 (its cost per write grows with the trucks).
-  long writes = 0, last = 0;
-  for (long n = 1; n <= 100000; ++n) {
-    if (stream::posterior_due(n, 1000)) {
-      ++writes;
-      last = n;
-    }
-    INFO("trucks " << n << ", last written at " << last);
-    REQUIRE(n - last < std::max(1L, n / 1000));
-  }
-  for (long n = 1; n <= 1000; ++n) REQUIRE(stream::posterior_due(n, 1000));
-  CHECK(writes == 1000 + 1000 + 1000 + 1000 + 1000 + 1000 + 1000 + (100000 - 64000) / 64);
-  CHECK(writes < 8000);
-  // A stream of 7 trucks, every truck up to 2: posterior.json at trucks 1, 2, 3, 4 and 6, and at
-  // the end of the run (7); 3 writes per truck besides, and the rejected record. A full disk at any
-  // of them resumes to the uninterrupted run's files, posterior.json included.
-  FaultCase c(7);
-  CHECK(fail_each_write_and_resume(c, 2) == 7 * 3 + 6 + 1);
-  const auto cloud = io::read_posterior_file(c.dir.file("reference"));
-  CHECK(cloud.trucks_seen == 7);
 }
 
 TEST_CASE("the history holds a report for every checkpoint, the posterior file's last, and refuses a damaged one",

@@ -53,8 +53,7 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   if (fs::exists(checkpoint)) restore_checkpoint(checkpoint);
   open_history();
   if (resumed_ && posterior_seq_ != seq_) {
-    // posterior.json may lag the checkpoint: the last run failed after the history's commit, or
-    // ended between two of its writes (posterior_due).
+    // posterior.json may lag the checkpoint if the last run failed after the history's commit.
     write_posterior(cores_.posteriors());
   }
   if (resumed_ && progress_) {
@@ -162,14 +161,7 @@ void WimStream::write_history_and_posterior(const std::string& source, std::size
   const HistoryRowsInput row{.seq = seq_, .source = source, .lines_consumed = lines_consumed,
                              .checkpoint_checksum = checkpoint_checksum_};
   history_->append(history_rows(classes, site_, options_.history_prediction, row));
-  if (posterior_due(cores_.trucks_seen(), options_.posterior_every_truck_up_to)) write_posterior(classes);
-}
-
-bool posterior_due(long trucks, long every_up_to) {
-  if (trucks <= every_up_to || every_up_to <= 0) return true;
-  long interval = 1;
-  while (interval * 2 <= trucks / every_up_to) interval *= 2;
-  return trucks % interval == 0;
+  write_posterior(classes);
 }
 
 void WimStream::write_posterior(const fleet::ClassPosteriors& classes) {
@@ -272,8 +264,6 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
     }
     if (options_.report_every > 0 && cores_.trucks_seen() % options_.report_every == 0) report();
   }
-  // The last checkpoint's posterior.json, if its turn had not come (posterior_due).
-  if (seq_ > 0 && posterior_seq_ != seq_) write_posterior(cores_.posteriors());
   report();
   counts.total_absorbed = cores_.trucks_seen();
   return counts;

@@ -22,12 +22,9 @@
 //                    sequence number and checksum; a resume adds the one row set a failure between
 //                    the two can leave missing, and refuses a history that disagrees
 //   posterior.json   the posterior file `predict --posterior DIR` reads (a posterior per class when
-//                    the input has a class column); rewritten atomically after a checkpoint: after
-//                    every one up to StreamOptions::posterior_every_truck_up_to trucks, then every
-//                    2^k trucks with 2^k <= trucks / that count (the file holds every truck's speed
-//                    and mass, so it grows with N: written at every truck it would make a long
-//                    stream's cost per truck grow, 52 ms per write at 100,000 trucks), and at the
-//                    end of every run; a resume rewrites it from the checkpoint
+//                    the input has a class column); rewritten atomically after every checkpoint. Its
+//                    size stops growing at MarginalSmc::kPredictionPool trucks (the speeds and
+//                    masses predictions draw from), so its cost per truck is flat
 //   rejects.csv      every rejected record verbatim, each after a '# line N: reason' comment, under
 //                    a copy of the input's header, so it is itself a WIM log to fix and replay
 //   lock             flock(2)ed by the running stream, holding its process id (state_lock.hpp):
@@ -80,15 +77,7 @@ struct StreamOptions {
   // The prediction each checkpoint's history row set holds: lighter than a report's, since it runs
   // after every truck (about 2,000 passes per class; history_rows.hpp).
   predict::PredictionOptions history_prediction{.theta_draws = 50, .trucks_per_draw = 40};
-  // posterior.json after every checkpoint up to this many trucks, then every 2^k trucks with
-  // 2^k <= trucks / this (so at most this many trucks behind the checkpoint, in proportion), and
-  // at the end of every run. The history holds every checkpoint's report either way.
-  long posterior_every_truck_up_to = 1000;
 };
-
-// Whether posterior.json is written at the checkpoint that brings the posterior to `trucks`
-// (StreamOptions::posterior_every_truck_up_to = `every_up_to`).
-bool posterior_due(long trucks, long every_up_to);
 
 struct StreamCounts {
   long absorbed = 0;  // this run
