@@ -107,13 +107,6 @@ double MarginalTarget::log_posterior(const HyperVector& theta) const {
   return lp + sum_loglik(store_, marginal_, store_.trucks(), theta);
 }
 
-namespace {
-// x rounded to the log grid exp(step Z) (step 0: x itself).
-double on_log_grid(double x, double step) {
-  return step > 0.0 && x > 0.0 ? std::exp(step * std::round(std::log(x) / step)) : x;
-}
-}  // namespace
-
 MarginalTarget::TableSettings MarginalTarget::ideal_settings(const Eigen::ArrayXd& W) const {
   TableSettings s = settings_;
   const Eigen::Index n = trucks();
@@ -146,24 +139,14 @@ MarginalTarget::TableSettings MarginalTarget::ideal_settings(const Eigen::ArrayX
   pop.k_sd_npm = options_.population_widening * std::sqrt((W * (sk.square() + (K - pop.k_mean_npm).square())).sum());
   pop.kt_sd_npm =
       options_.population_widening * std::sqrt((W * (skt.square() + (Kt - pop.kt_mean_npm).square())).sum());
-  if (options_.settings_log_step > 0.0) {
-    const double step = options_.settings_log_step;
-    s.lattice.dk_npm = on_log_grid(s.lattice.dk_npm, step);
-    s.lattice.dkt_npm = on_log_grid(s.lattice.dkt_npm, step);
-    pop.k_sd_npm = on_log_grid(pop.k_sd_npm, step);
-    pop.kt_sd_npm = on_log_grid(pop.kt_sd_npm, step);
-    pop.k_mean_npm = 0.25 * pop.k_sd_npm * std::round(pop.k_mean_npm / (0.25 * pop.k_sd_npm));
-    pop.kt_mean_npm = 0.25 * pop.kt_sd_npm * std::round(pop.kt_mean_npm / (0.25 * pop.kt_sd_npm));
-  }
-  s.sigma_ref = on_log_grid(s.sigma_ref, options_.settings_sigma_log_step);
   s.population = pop;
   return s;
 }
 
 double MarginalTarget::max_piece_sd(const Eigen::ArrayXd& W) const {
   const double low_sigma_z = weighted_quantile(theta_.row(kSigmaZ), W, 0.1);
-  return std::clamp(on_log_grid(options_.lateral_piece_fraction * low_sigma_z, options_.settings_log_step),
-                    options_.min_piece_sd_m, std::max(options_.min_piece_sd_m, options_.table.max_piece_sd_m));
+  return std::clamp(options_.lateral_piece_fraction * low_sigma_z, options_.min_piece_sd_m,
+                    std::max(options_.min_piece_sd_m, options_.table.max_piece_sd_m));
 }
 
 model::TruckTableOptions MarginalTarget::table_options(const TableSettings& s) const {

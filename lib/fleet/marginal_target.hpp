@@ -100,12 +100,6 @@ class MarginalTarget final : public smc::TemperedModel {
     // cloud by at most 1/freeze_divisor of the trucks, well inside population_widening.
     int freeze_divisor = 32;
     int freeze_max = 64;
-    // Seed-independent settings (0 = off): the lattice spacings, the population's sds and the
-    // z-piece limit rounded to a log grid of this step, the population's means to a quarter of
-    // their (rounded) sd, and σ_ref to a log grid of settings_sigma_log_step. Two runs of the same
-    // data then mostly build the very same tables, whatever their particles.
-    double settings_log_step = 0.0;
-    double settings_sigma_log_step = 0.0;
   };
 
   struct TableSettings {
