@@ -28,8 +28,9 @@ std::string check_and_list(const io::SiteManifest& manifest, const SiteFlags& fl
     SiteFlags own = flags;
     const site::Site site = site_of_manifest_entry(manifest, entry, own, quiet ? nullptr : &std::cerr);
     const auto records = read_manifest_site_log(manifest, entry, site, own);
-    out << entry.name << "," << entry.road << ",\"" << entry.sensors << "\"," << records.size() << "," << entry.log
-        << "\n";
+    // RFC 4180 quotes: the sensor array holds commas, a path may.
+    out << entry.name << ",\"" << entry.road << "\",\"" << entry.sensors << "\"," << records.size() << ",\"" << entry.log
+        << "\"\n";
   }
   return out.str();
 }

@@ -219,8 +219,8 @@ fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std:
   return c;
 }
 
-// A file with a "checksum" must match it; one without (written before ssrfleet 0.x sealed its
-// files, or by hand) is read as it is. A cut file is not valid JSON, so either way damage is an
+// A file with a "checksum" must match it; one without (written before posterior files carried a
+// checksum, or by hand) is read as it is. A cut file is not valid JSON, so either way damage is an
 // error naming the file, never a wrong posterior.
 void check_checksum(const nlohmann::json& j, const std::string& path) {
   if (!j.is_object() || !j.contains(kChecksumKey)) return;

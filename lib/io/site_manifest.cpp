@@ -1,5 +1,6 @@
 #include "io/site_manifest.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -22,7 +23,7 @@ std::string resolve(const std::string& folder, const std::string& path) {
   return p.is_absolute() || folder.empty() ? path : (fs::path(folder) / p).lexically_normal().string();
 }
 
-std::string quoted_keys() {
+std::string key_list() {
   std::string s;
   for (const char* k : kSiteKeys) s += std::string(s.empty() ? "" : ", ") + k;
   return s;
@@ -65,11 +66,11 @@ SiteManifest read_site_manifest(std::istream& in, const std::string& path, const
     s.index = i;
     const std::string at = "sites[" + std::to_string(i) + "]";
     const auto& e = list[i];
-    if (!e.is_object()) throw DataError(path, 0, at, "must be an object with " + quoted_keys());
+    if (!e.is_object()) throw DataError(path, 0, at, "must be an object with " + key_list());
     // The name first, so every later message can name the site.
     const auto text = [&](const char* key) -> std::string {
       const std::string who = s.name.empty() ? "" : "site '" + s.name + "': ";
-      if (!e.contains(key)) throw DataError(path, 0, at + "." + key, who + "missing (a site has " + quoted_keys() + ")");
+      if (!e.contains(key)) throw DataError(path, 0, at + "." + key, who + "missing (a site has " + key_list() + ")");
       if (!e[key].is_string() || e[key].get<std::string>().empty()) {
         throw DataError(path, 0, at + "." + key, who + "must be a non-empty string");
       }
@@ -82,7 +83,7 @@ SiteManifest read_site_manifest(std::istream& in, const std::string& path, const
     if (!names.insert(s.name).second) throw DataError(path, 0, at + ".name", "site '" + s.name + "' appears twice");
     for (const auto& [key, value] : e.items()) {
       if (std::find(std::begin(kSiteKeys), std::end(kSiteKeys), key) == std::end(kSiteKeys)) {
-        throw DataError(path, 0, at + "." + key, "site '" + s.name + "': unknown key (a site has " + quoted_keys() + ")");
+        throw DataError(path, 0, at + "." + key, "site '" + s.name + "': unknown key (a site has " + key_list() + ")");
       }
     }
     const std::string road = text("road");
