@@ -1,5 +1,7 @@
 // The site manifest's reader (issue 21 items 1 and 6): paths relative to the manifest's folder,
 // and every bad manifest a DataError naming the manifest, the field and the site.
+#include <chrono>
+#include <fstream>
 #include <string>
 
 #include <catch2/catch.hpp>
@@ -96,4 +98,23 @@ TEST_CASE("a bad site manifest names the manifest, the field and the site", "[io
   CHECK(d.error(R"({"sites": [7]})").field() == "sites[0]");
   // No manifest.
   CHECK_THROWS_AS(io::read_site_manifest(d.dir.file("none.json")), MissingInputError);
+}
+
+TEST_CASE("a site manifest past its size limit is refused before it is parsed", "[io][sites]") {
+  ManifestDir d;
+  {
+    // Valid JSON all the way (one site, then white space), so only the size can refuse it.
+    std::ofstream out(d.manifest, std::ios::binary);
+    out << R"({"sites": [{"name": "n", "road": "AS1", "sensors": "76,1.5,16", "log": "logs/a.csv"}])";
+    const std::string spaces(1 << 20, ' ');
+    for (std::uintmax_t written = 0; written <= io::kMaxSiteManifestBytes; written += spaces.size()) out << spaces;
+    out << "}";
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const auto e = test::data_error([&] { io::read_site_manifest(d.manifest); });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  REQUIRE(e);
+  CHECK(e->file() == d.manifest);
+  CHECK(e->field() == "size");
+  CHECK(seconds < 1.0);
 }

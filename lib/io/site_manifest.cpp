@@ -107,6 +107,15 @@ SiteManifest read_site_manifest(std::istream& in, const std::string& path, const
 SiteManifest read_site_manifest(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw MissingInputError("cannot open site manifest '" + path + "'");
+  // The JSON is parsed whole, into a tree several times its size: a file far past any network's
+  // manifest (a site is about 100 bytes) is refused before a byte is parsed (README "Input limits").
+  std::error_code ec;
+  const auto bytes = fs::file_size(path, ec);
+  if (!ec && bytes > kMaxSiteManifestBytes) {
+    throw DataError(path, 0, "size",
+                    std::to_string(bytes) + " bytes, more than a site manifest may hold (" +
+                        std::to_string(kMaxSiteManifestBytes) + ")");
+  }
   return read_site_manifest(in, path, fs::path(path).parent_path().string());
 }
 

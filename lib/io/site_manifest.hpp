@@ -11,6 +11,7 @@
 // site_of_manifest_entry's job (bin/cli_common.hpp), which names the manifest, site and field too.
 #pragma once
 
+#include <cstdint>
 #include <istream>
 #include <string>
 #include <vector>
@@ -34,6 +35,9 @@ struct SiteManifest {
   // "sites[i].key" for a field of site i, as every message names it.
   static std::string field(const ManifestSite& site, const std::string& key);
 };
+
+// The largest manifest file read: 16 MiB, some 150,000 sites.
+inline constexpr std::uintmax_t kMaxSiteManifestBytes = 16u << 20;
 
 // Reads and checks a manifest. Any problem is a DataError naming the manifest, the field
 // ("sites[2].log") and, where one is known, the site ("site 'B': no file ..."); a missing manifest
