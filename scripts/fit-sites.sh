@@ -7,8 +7,9 @@
 # every fit (for example --particles 2048 --seed 7 --m1 450). Environment: SSRFLEET (the binary,
 # default build/ssrfleet beside this script), JOBS (fits at once, default: the cores / 2, since each
 # fit uses 2 threads; at least 1), THREADS (threads per fit, default 2).
-# Exit status: 0 if every site was fitted and collected; otherwise the first failure's, with the
-# failed sites' logs named on standard error.
+# Exit status: 0 if every site was fitted and collected; the `sites` check's status if the manifest
+# is bad (no fit starts then); 1 if a fit failed (each failed site named on standard error with the
+# last line of its log); the collect step's status if that fails.
 set -euo pipefail
 if [[ $# -lt 2 ]]; then
   echo "usage: scripts/fit-sites.sh MANIFEST OUTDIR [fit options...]" >&2
