@@ -32,8 +32,9 @@ nlohmann::json number_or_null(double x) { return std::isfinite(x) ? nlohmann::js
 constexpr const char* kChecksumKey = "checksum";
 constexpr const char* kChecksumPrefix = "fnv1a64:";
 
-std::string content_checksum(nlohmann::json j) {
-  j.erase(kChecksumKey);
+// The checksum of `j`, which must hold no "checksum" member (no copy of the tree is made: a
+// stream writes a posterior file after every truck).
+std::string content_checksum(const nlohmann::json& j) {
   const std::string text = j.dump();
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx",
@@ -44,6 +45,7 @@ std::string content_checksum(nlohmann::json j) {
 }  // namespace
 
 std::string posterior_file_text(nlohmann::json j) {
+  j.erase(kChecksumKey);
   j[kChecksumKey] = content_checksum(j);
   return j.dump(1) + "\n";
 }
@@ -222,9 +224,11 @@ fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std:
 // A file with a "checksum" must match it; one without (written before posterior files carried a
 // checksum, or by hand) is read as it is. A cut file is not valid JSON, so either way damage is an
 // error naming the file, never a wrong posterior.
-void check_checksum(const nlohmann::json& j, const std::string& path) {
+// The member is taken out of `j` (the readers do not need it).
+void check_checksum(nlohmann::json& j, const std::string& path) {
   if (!j.is_object() || !j.contains(kChecksumKey)) return;
-  const nlohmann::json& stored = j.at(kChecksumKey);
+  const nlohmann::json stored = std::move(j[kChecksumKey]);
+  j.erase(kChecksumKey);
   if (!stored.is_string()) throw DataError(path, 0, kChecksumKey, "must be a string (\"fnv1a64:\" and 16 hex digits)");
   std::string computed;
   try {
