@@ -110,7 +110,7 @@ TEST_CASE("a manifest's site whose road does not cover its sensors, or whose log
   CHECK(bad.err.find("sites[0].sensors") != std::string::npos);
 }
 
-TEST_CASE("scripts/fit-sites.sh fits every site alone with GNU parallel and collects one table; a Slurm task fits one",
+TEST_CASE("scripts/fit-sites.sh fits every site alone with GNU parallel and collects one table, and a Slurm task fits one",
           "[cli][sites]") {
   TwoSites s;
   const std::string out = s.dir.file("out");

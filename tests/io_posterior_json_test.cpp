@@ -126,7 +126,7 @@ TEST_CASE("a posterior file cut at any 1 KiB offset or with any byte flipped is 
   }
 }
 
-TEST_CASE("a posterior file edited by hand fails its checksum; one without a checksum is read as it is",
+TEST_CASE("a posterior file edited by hand fails its checksum, and one without a checksum is read as it is",
           "[io][posterior]") {
   test::TempDir dir;
   const auto cloud = random_cloud(8, 3, false);
