@@ -150,6 +150,11 @@ site::Site site_of_manifest_entry(const io::SiteManifest& manifest, const io::Ma
 std::vector<records::WimRecord> read_manifest_site_log(const io::SiteManifest& manifest, const io::ManifestSite& entry,
                                                        const site::Site& site, const SiteFlags& flags,
                                                        const io::WimLimits& limits) {
+  if (entry.log.empty()) {
+    throw DataError(manifest.path, 0, io::SiteManifest::field(entry, "log"),
+                    "site '" + entry.name + "': missing: a fit reads each site's log (only a stream's manifest, whose "
+                    "one input names each record's site, may leave it out)");
+  }
   try {
     return read_site_log(entry.log, site, flags, limits);
   } catch (const DataError& e) {

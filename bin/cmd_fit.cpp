@@ -10,6 +10,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "fit_methods.hpp"
+#include "fit_sites.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/vehicle_classes.hpp"
 #include "io/posterior_json.hpp"
@@ -30,7 +31,8 @@ int run_fit(int argc, const char* const argv[]) {
       ("help,h", "show this help")
       ("log", po::value(&log_path), "WIM log (CSV) to replay")
       ("sites", po::value(&manifest_path),
-       "a site manifest (JSON: each site's name, road, sensors and log); with --site, fit that site alone")
+       "a site manifest (JSON: each site's name, road, sensors and log): one fleet posterior from all its sites; "
+       "with --site, fit that site alone")
       ("site", po::value(&site_name), "the manifest's site to fit (its log, road and sensors from the manifest)")
       ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
       ("out,o", po::value(&out)->default_value(out), "posterior file to write (JSON)")
@@ -46,7 +48,7 @@ int run_fit(int argc, const char* const argv[]) {
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, &positional, vm,
                      "usage: ssrfleet fit LOG [--road AS1|FILE] [--model SPEC] [--out posterior.json] [--particles P] [--seed K]\n"
-                     "       ssrfleet fit --sites MANIFEST --site NAME [...]")) {
+                     "       ssrfleet fit --sites MANIFEST [--site NAME] [...]")) {
     return 0;
   }
   check_particles(fit.particles);
@@ -68,8 +70,8 @@ int run_fit(int argc, const char* const argv[]) {
       }
     }
     if (site_name.empty()) {
-      throw UsageError("--sites needs --site NAME: the joint fit of all a manifest's sites at once is not available yet; "
-                       "fit each site alone (scripts/fit-sites.sh runs them all and collects their posteriors)");
+      fit_manifest_sites({manifest_path, out, method, seed, quiet}, fit, site_flags, limits);
+      return 0;
     }
     manifest = io::read_site_manifest(manifest_path);
     entry = &manifest->find(site_name);

@@ -13,23 +13,26 @@
 #include "io/posterior_json.hpp"
 #include "io/site_manifest.hpp"
 #include "model/fleet_model.hpp"
+#include "sites_check.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::cli {
 
 namespace {
 
-// One row per site: each site built (its road covers its sensors) and its log read whole.
-// Returns the table; nothing is written unless every site passes.
+// One row per site: each site built (its road covers its sensors) and its log read whole (a site
+// with no log, as a stream's manifest may have, lists no trucks). Returns the table; nothing is
+// written unless every site passes.
 std::string check_and_list(const io::SiteManifest& manifest, const SiteFlags& flags, bool quiet) {
   std::ostringstream out;
   out << "site,road,sensors,trucks,log\n";
   for (const auto& entry : manifest.sites) {
     SiteFlags own = flags;
     const site::Site site = site_of_manifest_entry(manifest, entry, own, quiet ? nullptr : &std::cerr);
-    const auto records = read_manifest_site_log(manifest, entry, site, own);
+    const std::string trucks =
+        entry.log.empty() ? "" : std::to_string(read_manifest_site_log(manifest, entry, site, own).size());
     // RFC 4180 quotes: the sensor array holds commas, a path may.
-    out << entry.name << ",\"" << entry.road << "\",\"" << entry.sensors << "\"," << records.size() << ",\"" << entry.log
+    out << entry.name << ",\"" << entry.road << "\",\"" << entry.sensors << "\"," << trucks << ",\"" << entry.log
         << "\"\n";
   }
   return out.str();
@@ -70,9 +73,10 @@ std::string collect(const io::SiteManifest& manifest, const SiteFlags& flags, co
 }  // namespace
 
 int run_sites(int argc, const char* const argv[]) {
-  std::string manifest_path, collect_dir, out = "-";
-  bool names = false, quiet = false;
+  std::string manifest_path, collect_dir, out = "-", seed_text = "1";
+  bool names = false, quiet = false, check = false;
   SiteFlags flags;
+  SiteCheckFlags check_flags;
   po::options_description desc("sites options");
   desc.add_options()
       ("help,h", "show this help")
@@ -80,6 +84,14 @@ int run_sites(int argc, const char* const argv[]) {
       ("names", po::bool_switch(&names), "print the sites' names, one per line, and nothing else (for scripts)")
       ("collect", po::value(&collect_dir),
        "read each site's posterior DIR/NAME.json (fit alone) and write their summaries as one CSV table")
+      ("check", po::bool_switch(&check),
+       "flag a site whose fleet differs from the other sites': fits each site alone and the others without it, "
+       "and compares their stiffness hyperparameters (a conflict p-value per site)")
+      ("particles", po::value(&check_flags.particles)->default_value(check_flags.particles), "--check: particles per fit")
+      ("threads", po::value(&check_flags.threads)->default_value(check_flags.threads), "--check: worker threads (0 = all cores)")
+      ("seed", po::value(&seed_text)->default_value(seed_text), "--check: random seed")
+      ("alpha", po::value(&check_flags.alpha)->default_value(check_flags.alpha, "0.01"),
+       "--check: family-wise level; a site is flagged at p < alpha / sites")
       ("out,o", po::value(&out)->default_value(out), "where the table goes ('-' = standard output)")
       ("quiet,q", po::bool_switch(&quiet), "no warnings about the roads on standard error");
   flags.add_to(desc, /*with_sensors=*/false);
@@ -87,12 +99,18 @@ int run_sites(int argc, const char* const argv[]) {
   positional.add("manifest", 1);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, &positional, vm,
-                     "usage: ssrfleet sites MANIFEST [--names | --collect DIR] [--out FILE]\n"
+                     "usage: ssrfleet sites MANIFEST [--names | --collect DIR | --check] [--out FILE]\n"
                      "  without --names or --collect: checks every site (road, sensors, log) and lists them")) {
     return 0;
   }
-  if (names && !collect_dir.empty()) throw UsageError("give --names or --collect, not both");
+  if (int(names) + int(!collect_dir.empty()) + int(check) > 1) throw UsageError("give one of --names, --collect and --check");
+  check_flags.seed = parse_seed(seed_text);
   const io::SiteManifest manifest = io::read_site_manifest(manifest_path);
+  if (check) {
+    const std::string table = check_site_fleets(manifest, flags, check_flags, quiet ? nullptr : &std::cerr, std::cerr);
+    write_output(out, [&](std::ostream& os) { os << table; });
+    return 0;
+  }
   if (names) {
     for (const auto& s : manifest.sites) std::cout << s.name << "\n";
     return 0;

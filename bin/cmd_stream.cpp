@@ -6,12 +6,14 @@
 #include <atomic>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <string>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "model/model_spec.hpp"
+#include "io/site_manifest.hpp"
 #include "records/vehicle_class.hpp"
 #include "site/road_source.hpp"
 #include "stream/wim_stream.hpp"
@@ -36,7 +38,7 @@ void install_stop_handlers() {
 }  // namespace
 
 int run_stream(int argc, const char* const argv[]) {
-  std::string road = "AS1", input = "-", seed_text = "1", model_text = "base", classes_text;
+  std::string road = "AS1", input = "-", seed_text = "1", model_text = "base", classes_text, manifest_path;
   bool quiet = false;
   long particles = 1024;
   int threads = 0;
@@ -46,6 +48,9 @@ int run_stream(int argc, const char* const argv[]) {
   desc.add_options()
       ("help,h", "show this help")
       ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
+      ("sites", po::value(&manifest_path),
+       "a site manifest: one fleet from all its sites; the input's `site` column names each record's site, a record "
+       "fills its site's first M value columns (the manifest's logs are not read and may be left out)")
       ("state", po::value(&options.state_dir)->required(), "state directory (checkpoint, posterior.json, rejects.csv)")
       ("input,i", po::value(&input)->default_value(input), "WIM log to read ('-' = standard input)")
       ("follow,f", po::bool_switch(&options.follow), "at the end of the input wait for more, like tail -f (stop with Ctrl-C)")
@@ -69,14 +74,37 @@ int run_stream(int argc, const char* const argv[]) {
   site_flags.add_to(desc);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, nullptr, vm,
-                     "usage: ssrfleet stream --state DIR [--road AS1|FILE] [--input FILE] [--follow] [--report-every N]")) {
+                     "usage: ssrfleet stream --state DIR [--road AS1|FILE | --sites MANIFEST] [--input FILE] [--follow] [--report-every N]")) {
     return 0;
   }
   check_particles(particles);
   if (options.fit.latent.window < 0) throw UsageError("--window must be >= 0");
   if (options.fit.latent.window > 0) options.fit.core = fleet::OnlineFitOptions::Core::kLatent;
   // The core is chosen before the sampler options go to it (sampler() is the chosen core's).
-  const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
+  // The sites: --road and the site flags, or a manifest's (heap: the stream keeps pointers to them).
+  std::vector<std::unique_ptr<site::Site>> sites;
+  std::vector<stream::WimStream::StreamSite> stream_sites;
+  if (manifest_path.empty()) {
+    sites.push_back(std::make_unique<site::Site>(site::load_road(road, &std::cerr), site_flags.to_options()));
+    stream_sites.push_back({"", sites.back().get()});
+  } else {
+    for (const char* own : {"road", "sensors"}) {
+      if (vm.count(own) && !vm[own].defaulted()) {
+        throw UsageError(std::string("--") + own + " with --sites: a manifest's site brings its own road and sensors");
+      }
+    }
+    if (options.fit.latent.window > 0 || model_text != "base") {
+      throw UsageError("--sites streams the base model on the marginal core (each truck's table built through its own "
+                       "site); --window and --model need the latent core, which streams one site");
+    }
+    const io::SiteManifest manifest = io::read_site_manifest(manifest_path);
+    for (const auto& entry : manifest.sites) {
+      SiteFlags own = site_flags;
+      sites.push_back(std::make_unique<site::Site>(site_of_manifest_entry(manifest, entry, own, &std::cerr)));
+      stream_sites.push_back({entry.name, sites.back().get()});
+    }
+  }
+  const site::Site& site = *sites.front();
   const fleet::ModelSpec model = fleet::parse_model_spec(model_text, site);
   if (model.extension) {
     if (options.fit.latent.window > 0) {
@@ -108,7 +136,7 @@ int run_stream(int argc, const char* const argv[]) {
   if (options.follow && input == "-") throw UsageError("--follow needs --input FILE (standard input follows by itself)");
 
   install_stop_handlers();
-  stream::WimStream stream(site, options, quiet ? nullptr : &std::cerr, std::cout);
+  stream::WimStream stream(stream_sites, options, quiet ? nullptr : &std::cerr, std::cout);
   std::ifstream file;
   if (input != "-") {
     file.open(input);

@@ -46,6 +46,10 @@ struct FitFlags {
 fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records::WimRecord>& records,
                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress,
                               const fleet::ModelExtension* extension = nullptr);
+// One fleet over several sites (fleet/joint_sites.hpp): a record's `site` indexes `sites`; the
+// marginal core only (UsageError for options that need the latent one).
+fleet::PosteriorCloud fit_smc(const std::vector<const site::Site*>& sites, const std::vector<records::WimRecord>& records,
+                              const FitFlags& flags, std::uint64_t seed, std::ostream* progress);
 fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
                                const FitFlags& flags, std::uint64_t seed, std::ostream* progress,
                                const fleet::ModelExtension* extension = nullptr);

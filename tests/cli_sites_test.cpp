@@ -1,13 +1,16 @@
 // Many sites fitted one by one (issue 21 items 5 and 6): `fit --sites M --site NAME`, `sites`
 // (check, --names, --collect), scripts/fit-sites.sh (GNU parallel) and scripts/fit-sites.sbatch
 // (a Slurm array task), and a bad manifest entry named by manifest, site and field.
+#include <algorithm>
 #include <cstdlib>
 #include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <catch2/catch.hpp>
 
+#include "fleet/joint_sites.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "io/csv_reader.hpp"
 #include "io/posterior_json.hpp"
@@ -73,11 +76,82 @@ TEST_CASE("fit --sites M --site NAME gives the very posterior of fit with that s
     CHECK(r.status == 64);
     CHECK(r.err.find(says) != std::string::npos);
   };
-  usage("--sites " + q(s.manifest), "--site NAME");
+  usage("--sites " + q(s.manifest) + " --method mcmc", "--site NAME");
+  usage("--sites " + q(s.manifest) + " --core latent", "marginal core");
+  usage("--sites " + q(s.manifest) + " --model tyre_damping", "--site NAME");
   usage("--site south", "--sites");
   usage("--sites " + q(s.manifest) + " --site south --road AS1", "--road with --sites");
   usage("--sites " + q(s.manifest) + " --site east", "north, south");
   usage("", "LOG, or --sites");
+}
+
+TEST_CASE("fit --sites M fits one fleet from every site, and predict --sites M --site NAME predicts a site with its "
+          "own traffic",
+          "[cli][sites]") {
+  TwoSites s;
+  const std::string joint = s.dir.file("joint.json");
+  const auto fit = run_ssrfleet("fit --sites " + q(s.manifest) + " --particles 64 --seed 3 --quiet --out " + q(joint), s.dir);
+  INFO(fit.err);
+  REQUIRE(fit.status == 0);
+  const fleet::PosteriorCloud cloud = io::read_posterior_file(joint);
+  CHECK(cloud.trucks_seen == 48);
+  REQUIRE(cloud.sites.size() == 2);
+  CHECK(cloud.sites[0].name == "north");
+  CHECK(cloud.sites[1].name == "south");
+  CHECK(cloud.sites[1].sensors == 8);
+  CHECK(cloud.sites[1].road_name == "AS2");
+  CHECK(cloud.sites[1].trucks_seen == 24);
+  CHECK(cloud.sites[1].pool_begin == 24);
+  CHECK(cloud.sites[1].pool_count == 24);
+  CHECK(cloud.road_name == "AS1+AS2");
+
+  // At a site: the joint θ, that site's own speeds and masses; the very prediction of a posterior
+  // file holding just that (cloud_at_site) on that site's road and sensors.
+  const std::string at_south = s.dir.file("south.csv"), by_hand = s.dir.file("hand.csv");
+  const auto predicted = run_ssrfleet("predict --posterior " + q(joint) + " --sites " + q(s.manifest) +
+                                          " --site south --draws 20 --trucks-per-draw 20 --quiet --out " + q(at_south),
+                                      s.dir);
+  INFO(predicted.err);
+  REQUIRE(predicted.status == 0);
+  const fleet::PosteriorCloud south = fleet::cloud_at_site(cloud, 1);
+  CHECK(south.speed_mps.size() == 24);
+  io::write_posterior_file(s.dir.file("south.json"), south, fleet::summarise_cloud(south));
+  REQUIRE(run_ssrfleet("predict --posterior " + q(s.dir.file("south.json")) +
+                           " --road AS2 --sensors 70,2,8 --draws 20 --trucks-per-draw 20 --quiet --out " + q(by_hand),
+                       s.dir)
+              .status == 0);
+  const std::string text = test::read_text(at_south);
+  CHECK(std::count(text.begin(), text.end(), '\n') == 9);  // a header and the 8 sensors
+  CHECK(text == test::read_text(by_hand));
+
+  const auto usage = [&](const std::string& args, const std::string& says) {
+    const auto r = run_ssrfleet("predict --posterior " + q(joint) + " " + args + " --quiet --out " + q(s.dir.file("x.csv")),
+                                s.dir);
+    INFO(args << ": " << r.err);
+    CHECK(r.status == 64);
+    CHECK(r.err.find(says) != std::string::npos);
+  };
+  usage("--road AS1", "--sites MANIFEST --site NAME");  // the joint posterior is no one road's
+  usage("--sites " + q(s.manifest), "--site NAME");
+  usage("--site south", "--sites");
+  usage("--sites " + q(s.manifest) + " --site south --road AS2", "--road with --sites");
+  usage("--sites " + q(s.manifest) + " --site east", "north, south");
+  // Another road on purpose: every site's traffic.
+  CHECK(run_ssrfleet("predict --posterior " + q(joint) + " --road AS3 --new-road --draws 10 --trucks-per-draw 10 --quiet "
+                     "--out " + q(s.dir.file("new.csv")),
+                     s.dir)
+            .status == 0);
+
+  // A bad record in one site's log: the file, line and field, with the site and the manifest.
+  std::string b = test::read_text(s.dir.file("b.csv"));
+  const std::size_t line3 = b.find('\n', b.find('\n') + 1) + 1;
+  b.insert(line3, "BAD,1,x\n");
+  test::write_text(s.dir.file("b.csv"), b);
+  const auto bad = run_ssrfleet("fit --sites " + q(s.manifest) + " --particles 64 --quiet --out " + q(joint), s.dir);
+  INFO(bad.err);
+  CHECK(bad.status == 65);
+  CHECK(bad.err.find(s.dir.file("b.csv") + ":3: field") != std::string::npos);
+  CHECK(bad.err.find("site 'south' of manifest '" + s.manifest + "'") != std::string::npos);
 }
 
 TEST_CASE("a manifest's site whose road does not cover its sensors, or whose log has other sensors, is named",
@@ -174,4 +248,65 @@ TEST_CASE("scripts/fit-sites.sh fits every site alone with GNU parallel and coll
   CHECK(refused.status == 65);
   CHECK(refused.err.find("sites[0].sensors") != std::string::npos);
   CHECK_FALSE(std::filesystem::exists(out3 + "/south.json"));
+}
+
+TEST_CASE("a manifest may leave its logs out for a stream, and fit and sites then name the missing log",
+          "[cli][sites]") {
+  test::TempDir dir;
+  const std::string manifest = dir.file("m.json");
+  test::write_text(manifest, R"({"sites": [
+      {"name": "north", "road": "AS1", "sensors": "76,1.5,16"},
+      {"name": "south", "road": "AS2", "sensors": "70,2,8"}]})");
+  const auto listed = run_ssrfleet("sites " + q(manifest) + " --quiet", dir);
+  INFO(listed.err);
+  REQUIRE(listed.status == 0);
+  CHECK(listed.out.find("south,\"AS2\",\"70,2,8\",,\"\"") != std::string::npos);  // no trucks, no log
+  for (const std::string& command : {"fit --sites " + q(manifest), "fit --sites " + q(manifest) + " --site south"}) {
+    const auto r = run_ssrfleet(command + " --particles 64 --quiet --out " + q(dir.file("p.json")), dir);
+    INFO(command << ": " << r.err);
+    CHECK(r.status == 65);
+    CHECK(r.err.find(manifest) != std::string::npos);
+    CHECK(r.err.find(command.find("--site south") != std::string::npos ? "sites[1].log" : "sites[0].log") !=
+          std::string::npos);
+    CHECK(r.err.find("a fit reads each site's log") != std::string::npos);
+  }
+}
+
+TEST_CASE("sites --check writes a row per site with its conflict p-value and names no site of one fleet",
+          "[cli][sites][conflict]") {
+  TwoSites s;
+  REQUIRE(run_ssrfleet("simulate --road AS3 --sensors 60,1.5,12 --trucks 24 --seed 5 --quiet --out " + q(s.dir.file("c.csv")),
+                       s.dir)
+              .status == 0);
+  test::write_text(s.manifest, R"({"sites": [
+      {"name": "north", "road": "AS1", "sensors": "76,1.5,16", "log": "a.csv"},
+      {"name": "south", "road": "AS2", "sensors": "70,2,8", "log": "b.csv"},
+      {"name": "east", "road": "AS3", "sensors": "60,1.5,12", "log": "c.csv"}]})");
+  const auto r = run_ssrfleet("sites " + q(s.manifest) + " --check --particles 128 --threads 2 --seed 4 --quiet", s.dir);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  std::istringstream table(r.out);
+  io::CsvReader csv(table, "check.csv");
+  io::CsvRow row;
+  REQUIRE(csv.next(row));
+  const auto header = row.fields;
+  CHECK(header.size() == 5 + 7 * 4);
+  const auto p_col = static_cast<std::size_t>(io::column_index(header, "p_value"));
+  const auto flag_col = static_cast<std::size_t>(io::column_index(header, "flagged"));
+  std::vector<std::string> sites;
+  while (csv.next(row)) {
+    sites.push_back(row.fields[0]);
+    const double p = std::stod(row.fields[p_col]);
+    CHECK((p > 0.0 && p <= 1.0));
+    CHECK(row.fields[flag_col] == "no");
+  }
+  CHECK(sites == std::vector<std::string>{"north", "south", "east"});
+  CHECK(r.err.find("no site's fleet differs") != std::string::npos);
+
+  const auto both = run_ssrfleet("sites " + q(s.manifest) + " --check --names", s.dir);
+  CHECK(both.status == 64);
+  test::write_text(s.manifest, R"({"sites": [{"name": "north", "road": "AS1", "sensors": "76,1.5,16", "log": "a.csv"}]})");
+  const auto one = run_ssrfleet("sites " + q(s.manifest) + " --check --quiet", s.dir);
+  CHECK(one.status == 64);
+  CHECK(one.err.find("has one site") != std::string::npos);
 }

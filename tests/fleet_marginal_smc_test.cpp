@@ -160,38 +160,51 @@ TEST_CASE("tables prebuilt one truck per thread give the bits of tables built on
   CHECK(resumed.target().integrator_passes() == replayed->target().integrator_passes());
 }
 
-TEST_CASE("a marginal target of format 1 (before frozen table options) is migrated and resumes exactly",
+TEST_CASE("a marginal target of format 1 (before frozen table options) or 2 (before sites) is migrated and "
+          "resumes exactly",
           "[marginal]") {
   Case c(20, 3);
   fleet::MarginalSmc straight(c.site, options(64, 2, 4));
   for (const auto& r : c.log.records) straight.absorb(r);
 
-  // After its first truck a core has no frozen options: its format-2 bytes are format 1's with the
-  // version changed and one flag byte (0: none frozen) after the pass count.
-  fleet::MarginalSmc first(c.site, options(64, 2, 4));
-  first.absorb(c.log.records[0]);
-  std::string bytes = bytes_of(first);
-  const std::uint64_t magic = 0x4e52414d46525353ULL;  // the marginal target's "SSRFMARN"
-  const std::size_t at = bytes.find(std::string(reinterpret_cast<const char*>(&magic), sizeof magic));
-  REQUIRE(at != std::string::npos);
-  std::uint32_t version = 0;
-  std::memcpy(&version, bytes.data() + at + 8, sizeof version);
-  REQUIRE(version == 2);
-  // magic, version, lattice, σ_ref, two absent populations' flags, last rebuild, rebuilds, passes.
-  const std::size_t flag = at + 8 + 4 + sizeof(model::Lattice) + 8 + 1 + 1 + 8 + 4 + 8;
-  REQUIRE(bytes[flag] == 0);
-  bytes.erase(flag, 1);
-  version = 1;
-  std::memcpy(bytes.data() + at + 8, &version, sizeof version);
-  // The one truck record's seal covers everything before it: seal the edited bytes again.
-  const std::size_t body = bytes.size() - sizeof(std::uint64_t);
-  const std::uint64_t seal = detail::fnv1a(detail::kFnvOffset, bytes.data(), body);
-  std::memcpy(bytes.data() + body, &seal, sizeof seal);
+  for (const std::uint32_t old_version : {1u, 2u}) {
+    INFO("format " << old_version);
+    // After its first truck a core has no frozen options. Its format-2 bytes are format 3's with the
+    // version changed and no site index (4 bytes: 0) at the start of the truck record, right after
+    // the truck's id; format 1's are format 2's without the flag byte (0: none frozen) after the
+    // pass count.
+    fleet::MarginalSmc first(c.site, options(64, 2, 4));
+    first.absorb(c.log.records[0]);
+    std::string bytes = bytes_of(first);
+    const std::uint64_t magic = 0x4e52414d46525353ULL;  // the marginal target's "SSRFMARN"
+    const std::size_t at = bytes.find(std::string(reinterpret_cast<const char*>(&magic), sizeof magic));
+    REQUIRE(at != std::string::npos);
+    std::uint32_t version = 0;
+    std::memcpy(&version, bytes.data() + at + 8, sizeof version);
+    REQUIRE(version == 3);
+    // magic, version, lattice, σ_ref, two absent populations' flags, last rebuild, rebuilds, passes.
+    const std::size_t flag = at + 8 + 4 + sizeof(model::Lattice) + 8 + 1 + 1 + 8 + 4 + 8;
+    REQUIRE(bytes[flag] == 0);
+    const std::string& id = c.log.records[0].truck_id;
+    const std::size_t id_at = bytes.find(id, flag);
+    REQUIRE(id_at != std::string::npos);
+    REQUIRE(bytes.substr(id_at + id.size(), 4) == std::string(4, '\0'));
+    bytes.erase(id_at + id.size(), 4);
+    if (old_version == 1) bytes.erase(flag, 1);
+    std::memcpy(bytes.data() + at + 8, &old_version, sizeof old_version);
+    // The one truck record's seal covers everything before it: seal the edited bytes again.
+    const std::size_t body = bytes.size() - sizeof(std::uint64_t);
+    const std::uint64_t seal = detail::fnv1a(detail::kFnvOffset, bytes.data(), body);
+    std::memcpy(bytes.data() + body, &seal, sizeof seal);
 
-  fleet::MarginalSmc resumed(c.site, options(64, 2, 4));
-  restore_from(resumed, bytes);
-  for (std::size_t t = 1; t < c.log.records.size(); ++t) resumed.absorb(c.log.records[t]);
-  CHECK(bytes_of(resumed) == bytes_of(straight));
+    fleet::MarginalSmc resumed(c.site, options(64, 2, 4));
+    restore_from(resumed, bytes);
+    CHECK(resumed.target().read_old_truck_records());
+    // Its truck log must be written anew, not appended to: a generation of its own.
+    CHECK(resumed.table_generation() == first.table_generation() + fleet::MarginalSmc::kMigratedGeneration);
+    for (std::size_t t = 1; t < c.log.records.size(); ++t) resumed.absorb(c.log.records[t]);
+    CHECK(bytes_of(resumed) == bytes_of(straight));
+  }
 }
 
 TEST_CASE("a marginal-core checkpoint resumes bit-identically, and an old or cut one is refused by name",

@@ -1,6 +1,10 @@
 // The posterior file's checksum (issue 20 item 4): a file cut short or with a byte changed is a
 // DataError naming the file, never a wrong posterior; re-indenting it, or a file without a
 // checksum, still reads.
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <functional>
 #include <random>
 #include <string>
 
@@ -150,4 +154,64 @@ TEST_CASE("a posterior file edited by hand fails its checksum, and one without a
   test::write_text(path, j.dump(1));
   const auto edited = io::read_posterior_file(path);
   CHECK(edited.weights[0] > cloud.weights[0]);
+}
+
+TEST_CASE("a posterior of several sites lists them and reads back, and a site list that does not fit its pool is refused",
+          "[io][posterior][sites]") {
+  test::TempDir dir;
+  // 5 trucks in the pool. (The reader normalises the weights again: these 40 sum to exactly 1, so
+  // they read back bit for bit, as in the first test.)
+  auto cloud = random_cloud(40, 7, false);
+  cloud.trucks_seen = 9;
+  cloud.site_fingerprint = "sites:fa,fb";
+  cloud.sites = {{"north", "fa", "AS1", 16, 0.0, 3.5, 6, 0, 3}, {"south", "fb", "AS2", 8, 0.2, 3.0, 3, 3, 2}};
+  const std::string path = dir.file("p.json");
+  write(path, cloud);
+  const auto back = io::read_posterior_file(path);
+  CHECK(same(back, cloud));
+  REQUIRE(back.sites.size() == 2);
+  for (std::size_t s = 0; s < 2; ++s) {
+    const auto &a = back.sites[s], &b = cloud.sites[s];
+    CHECK((a.name == b.name && a.fingerprint == b.fingerprint && a.road_name == b.road_name && a.sensors == b.sensors &&
+           a.lateral_min_m == b.lateral_min_m && a.lateral_max_m == b.lateral_max_m && a.trucks_seen == b.trucks_seen &&
+           a.pool_begin == b.pool_begin && a.pool_count == b.pool_count));
+  }
+  // One posterior file without sites has none.
+  write(path, random_cloud(12, 5, false));
+  CHECK(io::read_posterior_file(path).sites.empty());
+
+  // Edits that a reader must refuse by field (written through the writer, so the checksum holds).
+  const auto refused = [&](const std::function<void(fleet::PosteriorCloud&)>& edit, const std::string& field) {
+    fleet::PosteriorCloud bad = cloud;
+    edit(bad);
+    write(path, bad);
+    const auto e = test::data_error([&] { io::read_posterior_file(path); });
+    REQUIRE(e);
+    CHECK(e->field() == field);
+    CHECK(std::string(e->what()).find(path) != std::string::npos);
+  };
+  refused([](auto& c) { c.sites[1].pool_begin = 2; }, "site.sites[1].pool");    // overlaps north's
+  refused([](auto& c) { c.sites[1].pool_count = 3; }, "site.sites[1].pool");    // past the pool's end
+  refused([](auto& c) { c.sites[1].pool_count = 1; }, "site.sites");            // a truck of no site
+  refused([](auto& c) { c.sites[1].trucks_seen = 4; }, "site.sites");           // 10 trucks, not 9
+  refused([](auto& c) { c.sites[1].name = "north"; }, "site.sites[1].name");    // two sites of one name
+  refused([](auto& c) { c.sites[0].sensors = 0; }, "site.sites[0].sensors");
+  refused([](auto& c) { c.sites.pop_back(); c.sites[0].pool_count = 5; c.sites[0].trucks_seen = 9; }, "site.sites");
+  refused([](auto& c) { c.sites[1].trucks_seen = 0; }, "site.sites[1].pool");  // no trucks, yet a pool
+}
+
+TEST_CASE("a posterior file over the size limit is refused before it is parsed", "[io][posterior]") {
+  test::TempDir dir;
+  const std::string path = dir.file("huge.json");
+  {
+    std::ofstream out(path);
+    out << "{";
+  }
+  std::filesystem::resize_file(path, io::kMaxPosteriorBytes + 1);  // sparse: no disk used
+  const auto start = std::chrono::steady_clock::now();
+  const auto e = test::data_error([&] { io::read_posterior_file(path); });
+  REQUIRE(e);
+  CHECK(e->field() == "size");
+  CHECK(std::string(e->what()).find(path) != std::string::npos);
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(1));
 }

@@ -14,27 +14,36 @@ namespace ssrfleet::fleet {
 
 inline constexpr std::uint64_t kCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
 
-inline void write_checkpoint_header(BinaryWriter& out, std::uint32_t version, const site::Site& site,
+// `fingerprint`: the site's (site::Site::fingerprint), or the sites' (fleet/joint_sites.hpp).
+inline void write_checkpoint_header(BinaryWriter& out, std::uint32_t version, const std::string& fingerprint,
                                     std::uint64_t seed) {
   out.value(kCheckpointMagic);
   out.value(version);
-  out.text(site.fingerprint());
+  out.text(fingerprint);
   out.value(seed);
+}
+inline void write_checkpoint_header(BinaryWriter& out, std::uint32_t version, const site::Site& site,
+                                    std::uint64_t seed) {
+  write_checkpoint_header(out, version, site.fingerprint(), seed);
 }
 
 // Reads and checks the header; `explain_version` turns a version this core does not read into the
 // reason given with the DataError (the caller's wording, e.g. what to do with an old state).
-inline void read_checkpoint_header(BinaryReader& in, std::uint32_t version, const site::Site& site, std::uint64_t seed,
-                                   const std::function<std::string(std::uint32_t)>& explain_version) {
+inline void read_checkpoint_header(BinaryReader& in, std::uint32_t version, const std::string& fingerprint,
+                                   std::uint64_t seed, const std::function<std::string(std::uint32_t)>& explain_version) {
   if (in.value<std::uint64_t>("magic") != kCheckpointMagic) in.fail("magic", "not an ssrfleet checkpoint");
   const auto found = in.value<std::uint32_t>("version");
   if (found != version) in.fail("version", explain_version(found));
-  if (in.text("site") != site.fingerprint()) {
+  if (in.text("site") != fingerprint) {
     in.fail("site", "the checkpoint belongs to another site (road or site options differ)");
   }
   if (in.value<std::uint64_t>("seed") != seed) {
     in.fail("seed", "the checkpoint was made with another seed; resume with the seed it started with");
   }
+}
+inline void read_checkpoint_header(BinaryReader& in, std::uint32_t version, const site::Site& site, std::uint64_t seed,
+                                   const std::function<std::string(std::uint32_t)>& explain_version) {
+  read_checkpoint_header(in, version, site.fingerprint(), seed, explain_version);
 }
 
 }  // namespace ssrfleet::fleet

@@ -1,6 +1,7 @@
 #include "fleet/marginal_smc.hpp"
 
 #include "fleet/checkpoint_header.hpp"
+#include "fleet/joint_sites.hpp"
 #include "fleet/smc_cloud.hpp"
 
 #include <algorithm>
@@ -18,17 +19,19 @@ MarginalTarget::Options with_particles(MarginalTarget::Options t, Eigen::Index p
 constexpr std::uint64_t kInitialDraws = 0;
 }  // namespace
 
-MarginalSmc::MarginalSmc(const site::Site& site, Options options)
-    : site_(site),
+MarginalSmc::MarginalSmc(std::vector<const site::Site*> sites, Options options)
+    : sites_(std::move(sites)),
       options_(std::move(options)),
-      target_(site, with_particles(options_.target, options_.sampler.particles)),
+      target_(sites_, with_particles(options_.target, options_.sampler.particles)),
       sampler_(options_.sampler),
       parallel_(options_.sampler.threads) {
+  fingerprint_ = sites_fingerprint(sites_);
   target_.initialise(sampler_.model_rngs().child(kInitialDraws));
 }
 
 smc::StageSummary MarginalSmc::absorb(const records::WimRecord& record) {
-  target_.add_truck(record.speed_mps, record.sprung_mass_kg, record.impact_factor, sampler_.weights(), parallel_);
+  target_.add_truck(record.speed_mps, record.sprung_mass_kg, record.impact_factor, sampler_.weights(), parallel_,
+                    record.site);
   truck_ids_.push_back(record.truck_id);
   smc::StageSummary truck = sampler_.run_stage(
       target_, "truck '" + record.truck_id + "' (#" + std::to_string(target_.trucks()) + ")");
@@ -49,7 +52,7 @@ void MarginalSmc::prepare(const std::vector<records::WimRecord>& records, std::s
   std::vector<MarginalTarget::UpcomingTruck> upcoming;
   upcoming.reserve(count);
   for (std::size_t i = next; i < next + count; ++i)
-    upcoming.push_back({records[i].speed_mps, records[i].sprung_mass_kg, &records[i].impact_factor});
+    upcoming.push_back({records[i].speed_mps, records[i].sprung_mass_kg, &records[i].impact_factor, records[i].site});
   target_.prebuild(upcoming, sampler_.weights(), parallel_);
 }
 
@@ -62,9 +65,37 @@ smc::MhSummary MarginalSmc::rejuvenate(int sweeps) {
 PosteriorCloud MarginalSmc::cloud() const {
   const auto& v = target_.speed_mps();
   const auto& m = target_.sprung_mass_kg();
-  const auto from = static_cast<std::ptrdiff_t>(v.size() > kPredictionPool ? v.size() - kPredictionPool : 0);
-  return smc_cloud(site_, sampler_, target_.theta(), {v.begin() + from, v.end()}, {m.begin() + from, m.end()},
-                   trucks_seen());
+  if (sites_.size() == 1) {
+    const auto from = static_cast<std::ptrdiff_t>(v.size() > kPredictionPool ? v.size() - kPredictionPool : 0);
+    return smc_cloud(*sites_.front(), sampler_, target_.theta(), {v.begin() + from, v.end()},
+                     {m.begin() + from, m.end()}, trucks_seen());
+  }
+  // Each site's most recent trucks, newest last, site by site: walk back from the newest truck.
+  const std::size_t per_site = std::max(kMinSitePool, kPredictionPool / sites_.size());
+  const auto& of = target_.truck_sites();
+  std::vector<std::vector<std::size_t>> recent(sites_.size());
+  std::vector<long> seen(sites_.size(), 0);
+  for (std::size_t i = of.size(); i-- > 0;) {
+    ++seen[of[i]];
+    if (recent[of[i]].size() < per_site) recent[of[i]].push_back(i);
+  }
+  std::vector<double> speed, mass;
+  std::vector<CloudSite> entries;
+  for (std::size_t s = 0; s < sites_.size(); ++s) {
+    const site::Site& site = *sites_[s];
+    entries.push_back({"", site.fingerprint(), site.surface().name, site.sensors(), site.lateral_min_m(),
+                       site.lateral_max_m(), seen[s], speed.size(), recent[s].size()});
+    for (auto it = recent[s].rbegin(); it != recent[s].rend(); ++it) {
+      speed.push_back(v[*it]);
+      mass.push_back(m[*it]);
+    }
+  }
+  PosteriorCloud c = smc_cloud(*sites_.front(), sampler_, target_.theta(), std::move(speed), std::move(mass), trucks_seen());
+  c.site_fingerprint = fingerprint_;
+  c.road_name.clear();
+  for (std::size_t s = 0; s < sites_.size(); ++s) c.road_name += (s ? "+" : "") + sites_[s]->surface().name;
+  c.sites = std::move(entries);
+  return c;
 }
 
 namespace {
@@ -81,7 +112,7 @@ void MarginalSmc::save(BinaryWriter& out) const {
 void MarginalSmc::restore(BinaryReader& in) { restore_split(in, in); }
 
 void MarginalSmc::save_state(BinaryWriter& out) const {
-  write_checkpoint_header(out, kCheckpointVersion, site_, sampler_.options().seed);
+  write_checkpoint_header(out, kCheckpointVersion, fingerprint_, sampler_.options().seed);
   const auto state = sampler_.state();
   out.value<std::int32_t>(state.stages_run);
   out.value<std::int32_t>(state.moves_run);
@@ -99,7 +130,7 @@ void MarginalSmc::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t 
 }
 
 void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {
-  read_checkpoint_header(in, kCheckpointVersion, site_, sampler_.options().seed, [](std::uint32_t v) -> std::string {
+  read_checkpoint_header(in, kCheckpointVersion, fingerprint_, sampler_.options().seed, [](std::uint32_t v) -> std::string {
     if (v == 1) {
       return "checkpoint format version 1 was written by the latent-variable core of ssrfleet 0.1; this build's "
              "default core reads version 4: replay the log into a new state directory (or resume it with --window, "

@@ -44,7 +44,9 @@ class MarginalSmc {
   // came out 0.59 against a truth of 0.35; with the pieces it is below 1e-3.
   static constexpr double kLateralErrorWarning = 0.01;
 
-  MarginalSmc(const site::Site& site, Options options);
+  MarginalSmc(const site::Site& site, Options options) : MarginalSmc(std::vector<const site::Site*>{&site}, std::move(options)) {}
+  // One fleet over several sites (fleet/joint_sites.hpp): a record's `site` indexes `sites`.
+  MarginalSmc(std::vector<const site::Site*> sites, Options options);
 
   // Tempers the record's likelihood in (and rebuilds the tables if the posterior asks for it).
   // Returns the record's stage summary.
@@ -74,14 +76,20 @@ class MarginalSmc {
   void save_state(BinaryWriter& out) const;
   void save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const;
   void restore_split(BinaryReader& state, BinaryReader& trucks);
-  int table_generation() const { return target_.rebuilds(); }
+  // A state read from truck records of an older format counts as a generation of its own
+  // (kMigratedGeneration apart), so its log is written anew in this build's format, never appended to.
+  int table_generation() const { return target_.rebuilds() + (target_.read_old_truck_records() ? kMigratedGeneration : 0); }
+  static constexpr int kMigratedGeneration = 1 << 24;
 
   // Observed (speed, mass) pairs that predictions draw from: the most recent ones, so a year-long
-  // stream's posterior file stays the same size.
+  // stream's posterior file stays the same size. Over several sites, each site's most recent
+  // kPredictionPool / sites (at least kMinSitePool), so a site's prediction draws its own traffic.
   static constexpr std::size_t kPredictionPool = 10000;
+  static constexpr std::size_t kMinSitePool = 500;
 
  private:
-  const site::Site& site_;
+  std::vector<const site::Site*> sites_;
+  std::string fingerprint_;  // sites_fingerprint(sites_): what the checkpoint is tied to
   Options options_;
   MarginalTarget target_;
   smc::TemperedSampler sampler_;

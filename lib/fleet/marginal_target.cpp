@@ -47,11 +47,12 @@ double weighted_quantile(const Eigen::Ref<const Eigen::RowVectorXd>& x, const Ei
 
 }  // namespace
 
-MarginalTarget::MarginalTarget(const site::Site& site, Options options)
-    : site_(site),
-      options_(std::move(options)),
-      lateral_{site.lateral_min_m(), site.lateral_max_m()},
-      marginal_(site.sensors(), lateral_, model::Lattice{}) {
+MarginalTarget::MarginalTarget(std::vector<const site::Site*> sites, Options options)
+    : sites_(std::move(sites)), options_(std::move(options)), marginal_(model::FleetMarginal(0, {}, {})) {
+  if (sites_.empty() || std::find(sites_.begin(), sites_.end(), nullptr) != sites_.end()) {
+    throw UsageError("MarginalTarget: needs at least one site");
+  }
+  marginal_ = make_marginal(model::Lattice{});
   if (options_.particles < 2) throw UsageError("MarginalTarget: particles must be >= 2");
   if (!(options_.lattice_fraction > 0.0 && options_.lattice_fraction <= 1.5)) {
     throw UsageError("MarginalTarget: lattice_fraction must be in (0, 1.5]");
@@ -85,6 +86,25 @@ void MarginalTarget::initialise(const smc::RngFactory& rngs) {
   base_sum_.setZero();
   inc_.setZero();
   mode_ = Mode::kIdle;
+}
+
+model::FleetMarginal MarginalTarget::make_marginal(const model::Lattice& lattice) const {
+  std::vector<model::SiteConstants> constants;
+  constants.reserve(sites_.size());
+  for (const site::Site* s : sites_) constants.push_back({s->sensors(), {s->lateral_min_m(), s->lateral_max_m()}});
+  return model::FleetMarginal(std::move(constants), lattice);
+}
+
+void MarginalTarget::check_truck(std::uint32_t site, const Eigen::VectorXd& impact_factors) const {
+  if (site >= sites_.size()) {
+    throw UsageError("MarginalTarget: a truck of site " + std::to_string(site) + " but the fit has " +
+                     std::to_string(sites_.size()) + " site(s)");
+  }
+  if (impact_factors.size() != site_of(site).sensors()) {
+    throw DataError("record", 0, "impact factors",
+                    "has " + std::to_string(impact_factors.size()) + " values but the site has " +
+                        std::to_string(site_of(site).sensors()) + " sensors");
+  }
 }
 
 HyperVector MarginalTarget::theta_of(Eigen::Index p) const {
@@ -205,8 +225,8 @@ std::size_t MarginalTarget::prebuild(const std::vector<UpcomingTruck>& upcoming,
   if (!prebuilt_.empty() && prebuilt_.front().truck <= n && prebuilt_.back().truck >= n + static_cast<std::int64_t>(count) - 1)
     return 0;
   for (const auto& u : upcoming) {
-    if (u.impact_factors == nullptr || u.impact_factors->size() != site_.sensors()) {
-      throw UsageError("MarginalTarget::prebuild: an upcoming truck has no impact factors for this site");
+    if (u.site >= sites_.size() || u.impact_factors == nullptr || u.impact_factors->size() != site_of(u.site).sensors()) {
+      throw UsageError("MarginalTarget::prebuild: an upcoming truck has no impact factors for its site");
     }
   }
   std::vector<Prebuilt> built(count);
@@ -217,9 +237,10 @@ std::size_t MarginalTarget::prebuild(const std::vector<UpcomingTruck>& upcoming,
       Prebuilt& b = built[static_cast<std::size_t>(i)];
       b.truck = n + i;
       b.freeze_id = freeze_id_;
-      b.fit = model::fit_truck(site_, u.speed_mps, u.sprung_mass_kg, *u.impact_factors, o);
-      b.table = model::build_truck_table(site_, u.speed_mps, u.sprung_mass_kg, *u.impact_factors, settings_.lattice, o,
-                                         b.fit);
+      b.site = u.site;
+      b.fit = model::fit_truck(site_of(u.site), u.speed_mps, u.sprung_mass_kg, *u.impact_factors, o);
+      b.table = model::build_truck_table(site_of(u.site), u.speed_mps, u.sprung_mass_kg, *u.impact_factors,
+                                         settings_.lattice, o, b.fit);
     }
   });
   prebuilt_ = std::move(built);
@@ -227,13 +248,10 @@ std::size_t MarginalTarget::prebuild(const std::vector<UpcomingTruck>& upcoming,
 }
 
 void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Eigen::VectorXd& impact_factors,
-                               const Eigen::ArrayXd& W, const smc::ParallelFor& parallel) {
+                               const Eigen::ArrayXd& W, const smc::ParallelFor& parallel, std::uint32_t site_index) {
   if (mode_ != Mode::kIdle) throw std::logic_error("MarginalTarget::add_truck: finish_stage() was not called");
-  if (impact_factors.size() != site_.sensors()) {
-    throw DataError("record", 0, "impact factors",
-                    "has " + std::to_string(impact_factors.size()) + " values but the site has " +
-                        std::to_string(site_.sensors()) + " sensors");
-  }
+  check_truck(site_index, impact_factors);
+  const site::Site& site = site_of(site_index);
   const util::ParallelRange range = [&parallel](Eigen::Index n, const util::RangeBody& body) { parallel(n, body); };
   model::TruckFit fit;
   model::TruckTable table;
@@ -243,7 +261,7 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
     model::TruckTableOptions o = table_options(settings_);
     o.population.reset();
     o.max_piece_sd_m = max_piece_sd(W);
-    fit = model::fit_truck(site_, speed_mps, sprung_mass_kg, impact_factors, o);
+    fit = model::fit_truck(site, speed_mps, sprung_mass_kg, impact_factors, o);
     settings_.sigma_ref = std::clamp(fit.sigma_hat, options_.prior.lo[kSigmaIf], options_.prior.hi[kSigmaIf]);
     settings_.lattice.k_origin_npm = fit.stiffness_npm;
     settings_.lattice.kt_origin_npm = fit.tyre_stiffness_npm;
@@ -251,21 +269,23 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
     settings_.lattice.dk_npm = options_.lattice_fraction * fit.stiffness_sd_per_sigma * settings_.sigma_ref / std::sqrt(2.0);
     settings_.lattice.dkt_npm =
         options_.lattice_fraction * fit.tyre_stiffness_sd_per_sigma * settings_.sigma_ref / std::sqrt(2.0);
-    marginal_ = model::FleetMarginal(site_.sensors(), lateral_, settings_.lattice);
+    marginal_ = make_marginal(settings_.lattice);
     o.sigma_ref = settings_.sigma_ref;
-    table = model::build_truck_table(site_, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
+    table = model::build_truck_table(site, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
   } else {
     const model::TruckTableOptions& o = frozen_table_options(W);
     const std::int64_t n = trucks();
     const auto it = std::find_if(prebuilt_.begin(), prebuilt_.end(),
-                                 [&](const Prebuilt& b) { return b.truck == n && b.freeze_id == freeze_id_; });
+                                 [&](const Prebuilt& b) {
+                                   return b.truck == n && b.freeze_id == freeze_id_ && b.site == site_index;
+                                 });
     if (it != prebuilt_.end()) {
       fit = it->fit;
       table = std::move(it->table);
       ++prebuilt_used_;
     } else {
-      fit = model::fit_truck(site_, speed_mps, sprung_mass_kg, impact_factors, o);
-      table = model::build_truck_table(site_, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
+      fit = model::fit_truck(site, speed_mps, sprung_mass_kg, impact_factors, o);
+      table = model::build_truck_table(site, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
     }
   }
   passes_ += table.passes;
@@ -273,7 +293,7 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
     ++lateral_checked_;
     lateral_error_abs_sum_ += std::abs(table.lateral_error_nats);
   }
-  store_.append(table);
+  store_.append(table, site_index);
   speed_mps_.push_back(speed_mps);
   sprung_mass_kg_.push_back(sprung_mass_kg);
   observed_if_.push_back(impact_factors);
@@ -320,23 +340,24 @@ void MarginalTarget::begin_rebuild(const Eigen::ArrayXd& W, const smc::ParallelF
   parallel(n, [&](Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index i = begin; i < end; ++i) {
       const auto u = static_cast<std::size_t>(i);
-      tables[u] = model::build_truck_table(site_, speed_mps_[u], sprung_mass_kg_[u], observed_if_[u], ideal.lattice,
-                                           o, fits_[u]);
+      tables[u] = model::build_truck_table(site_of(truck_sites()[u]), speed_mps_[u], sprung_mass_kg_[u],
+                                           observed_if_[u], ideal.lattice, o, fits_[u]);
     }
   });
   model::TableStore fresh;
   std::size_t nodes = 0;
   for (const auto& t : tables) nodes += t.nodes();
   fresh.reserve(tables.size(), nodes);
-  for (const auto& t : tables) {
-    fresh.append(t);
+  for (std::size_t u = 0; u < tables.size(); ++u) {
+    const model::TruckTable& t = tables[u];
+    fresh.append(t, truck_sites()[u]);
     passes_ += t.passes - t.fit.passes;
   }
   old_store_ = std::move(store_);
   old_marginal_ = marginal_;
   store_ = std::move(fresh);
   settings_ = ideal;
-  marginal_ = model::FleetMarginal(site_.sensors(), lateral_, settings_.lattice);
+  marginal_ = make_marginal(settings_.lattice);
   trucks_at_last_rebuild_ = n;
   population_at_rebuild_ = ideal.population;
   ++rebuilds_;

@@ -108,7 +108,10 @@ class MarginalTarget final : public smc::TemperedModel {
     std::optional<model::TruckTableOptions::Population> population;
   };
 
-  MarginalTarget(const site::Site& site, Options options);
+  MarginalTarget(const site::Site& site, Options options) : MarginalTarget(std::vector<const site::Site*>{&site}, std::move(options)) {}
+  // One fleet over several sites (README "Many sites"): each truck's table is built through its own
+  // site (add_truck's `site`, an index into `sites`), θ is shared. The sites must outlive this.
+  MarginalTarget(std::vector<const site::Site*> sites, Options options);
 
   // θ of every particle from the prior (before the first truck).
   void initialise(const smc::RngFactory& rngs);
@@ -116,13 +119,15 @@ class MarginalTarget final : public smc::TemperedModel {
   // Builds the truck's table with the settings the current cloud implies (W: the engine's normalised
   // weights) and makes its ℓ the next stage's increment. DataError-free: the record was checked.
   // A table prebuilt for this truck under the options still frozen is taken instead of building one.
+  // `site`: which of the sites logged the truck (UsageError if out of range).
   void add_truck(double speed_mps, double sprung_mass_kg, const Eigen::VectorXd& impact_factors,
-                 const Eigen::ArrayXd& W, const smc::ParallelFor& parallel);
+                 const Eigen::ArrayXd& W, const smc::ParallelFor& parallel, std::uint32_t site = 0);
 
   // One upcoming truck's data, for prebuild().
   struct UpcomingTruck {
     double speed_mps = 0.0, sprung_mass_kg = 0.0;
     const Eigen::VectorXd* impact_factors = nullptr;
+    std::uint32_t site = 0;
   };
   // Builds the fits and tables of the next trucks (upcoming[0] is the next add_truck's), as many as
   // the frozen options still cover (freezing them now from W if they are due, exactly as the next
@@ -156,10 +161,16 @@ class MarginalTarget final : public smc::TemperedModel {
   const std::vector<double>& speed_mps() const { return speed_mps_; }
   const std::vector<double>& sprung_mass_kg() const { return sprung_mass_kg_; }
   const std::vector<Eigen::VectorXd>& observed_if() const { return observed_if_; }
+  // Each truck's site, in truck order (indexes sites()).
+  const std::vector<std::uint32_t>& truck_sites() const { return store_.columns().site; }
+  const std::vector<const site::Site*>& sites() const { return sites_; }
   long long integrator_passes() const { return passes_; }
   // Trucks whose table add_truck() took from a prebuild() (by this process: not in checkpoints).
   long prebuilt_used() const { return prebuilt_used_; }
   int rebuilds() const { return rebuilds_; }
+  // The state was read from a format whose truck records name no site (before version 3): the
+  // records this build appends would not match the log's, so the whole log must be written anew.
+  bool read_old_truck_records() const { return loaded_version_ != 0 && loaded_version_ < 3; }
   // Σ_i ℓ_i(θ) + log p(θ) of particle p as cached (for tests: the density the moves target).
   double cached_log_posterior(Eigen::Index p) const { return base_sum_[p] + inc_[p] + log_prior(p); }
   // The same recomputed from the tables.
@@ -205,9 +216,14 @@ class MarginalTarget final : public smc::TemperedModel {
   const model::TruckTableOptions& frozen_table_options(const Eigen::ArrayXd& W);
   std::int64_t freeze_span(std::int64_t n) const;
 
-  const site::Site& site_;
+  // The FleetMarginal of these sites on a lattice.
+  model::FleetMarginal make_marginal(const model::Lattice& lattice) const;
+  const site::Site& site_of(std::uint32_t s) const { return *sites_[s]; }
+  // UsageError unless `site` indexes sites_ and the impact factors fit its sensors.
+  void check_truck(std::uint32_t site, const Eigen::VectorXd& impact_factors) const;
+
+  std::vector<const site::Site*> sites_;
   Options options_;
-  fleet::LateralRange lateral_;
   long lateral_checked_ = 0;
   double lateral_error_abs_sum_ = 0.0;
   TableSettings settings_;
@@ -247,11 +263,14 @@ class MarginalTarget final : public smc::TemperedModel {
   struct Prebuilt {
     std::int64_t truck = 0;
     std::uint64_t freeze_id = 0;
+    std::uint32_t site = 0;
     model::TruckFit fit;
     model::TruckTable table;
   };
   std::vector<Prebuilt> prebuilt_;
   std::uint64_t freeze_id_ = 0;
+  // The format version of the state load_particles() read (truck records before 3 name no site).
+  std::uint32_t loaded_version_ = 0;
   long prebuilt_used_ = 0;
 };
 

@@ -12,7 +12,9 @@ namespace {
 constexpr std::uint64_t kMagic = 0x4e52414d46525353ULL;  // "SSRFMARN"
 // Version 2 adds the frozen options of new trucks' tables. A version-1 state (no frozen options) is
 // read as one whose options are due to freeze at its next truck: exact, as every table in it is.
-constexpr std::uint32_t kVersion = 2;
+// Version 3 starts each truck record with its site's index (several sites, one fleet); a truck of
+// an older state is of the only site there was, index 0.
+constexpr std::uint32_t kVersion = 3;
 
 }  // namespace
 
@@ -60,6 +62,7 @@ static_assert(sizeof(model::TruckFit) == 8 * sizeof(double) + 2 * sizeof(std::in
 
 void MarginalTarget::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const {
   for (std::size_t i = begin; i < end; ++i) {
+    out.value<std::uint32_t>(truck_sites()[i]);
     out.value(speed_mps_[i]);
     out.value(sprung_mass_kg_[i]);
     out.matrix(observed_if_[i]);
@@ -83,7 +86,7 @@ void MarginalTarget::save_trucks(BinaryWriter& out, std::size_t begin, std::size
 std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   if (in.value<std::uint64_t>("marginal target") != kMagic) in.fail("marginal target", "not a marginal-core state");
   const auto version = in.value<std::uint32_t>("marginal target version");
-  if (version != kVersion && version != 1) {
+  if (version < 1 || version > kVersion) {
     in.fail("marginal target version", "format version " + std::to_string(version) + ", this build reads " +
                                            std::to_string(kVersion));
   }
@@ -136,7 +139,8 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   // Nothing is sized by n: it is not checked (its seal comes after the truck records), and up to 1e8
   // it would reserve 2 GB for a state of a few bytes. The store grows as records are read.
   store_ = model::TableStore{};
-  marginal_ = model::FleetMarginal(site_.sensors(), lateral_, settings_.lattice);
+  marginal_ = make_marginal(settings_.lattice);
+  loaded_version_ = version;
   mode_ = Mode::kIdle;
   old_store_.reset();
   old_marginal_.reset();
@@ -145,9 +149,14 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
 
 void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
   for (std::uint64_t i = 0; i < count; ++i) {
+    const std::uint32_t site = loaded_version_ >= 3 ? in.value<std::uint32_t>("truck site") : 0;
+    if (site >= sites_.size()) {
+      in.fail("truck site", "site " + std::to_string(site) + " of a state with " + std::to_string(sites_.size()) +
+                                " site(s)");
+    }
     speed_mps_.push_back(in.value<double>("truck speed"));
     sprung_mass_kg_.push_back(in.value<double>("truck mass"));
-    observed_if_.push_back(in.matrix("impact factors", site_.sensors(), 1));
+    observed_if_.push_back(in.matrix("impact factors", site_of(site).sensors(), 1));
     fits_.push_back(in.value<model::TruckFit>("truck fit"));
     add_to_width_sums(fits_.back());
     model::TruckTable t;
@@ -168,7 +177,7 @@ void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
     if (!(t.u_ref > 0.0) || !std::isfinite(speed_mps_.back()) || !std::isfinite(sprung_mass_kg_.back())) {
       in.fail("truck", "a truck record holds impossible values");
     }
-    store_.append(t);
+    store_.append(t, site);
   }
 }
 

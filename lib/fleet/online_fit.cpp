@@ -13,8 +13,8 @@ namespace {
 template <class Core>
 class CoreFit : public OnlineFit {
  public:
-  template <class Options>
-  CoreFit(const site::Site& site, const Options& o) : smc_(site, o) {}
+  template <class Sites, class Options>
+  CoreFit(const Sites& sites, const Options& o) : smc_(sites, o) {}
   smc::StageSummary absorb(const records::WimRecord& record) override { return smc_.absorb(record); }
   void rejuvenate(int sweeps) override { smc_.rejuvenate(sweeps); }
   PosteriorCloud cloud() const override { return smc_.cloud(); }
@@ -60,20 +60,33 @@ class LatentFit final : public CoreFit<FleetSmc> {
  public:
   using CoreFit::CoreFit;
   std::string core() const override { return "latent"; }
+  smc::StageSummary absorb(const records::WimRecord& record) override {
+    if (record.site != 0) throw UsageError("the latent core fits one site; several sites need the marginal core");
+    return smc_.absorb(record);
+  }
   const FleetSmc* latent() const override { return &smc_; }
 };
 
 }  // namespace
 
 std::unique_ptr<OnlineFit> make_online_fit(const site::Site& site, const OnlineFitOptions& options) {
+  return make_online_fit(std::vector<const site::Site*>{&site}, options);
+}
+
+std::unique_ptr<OnlineFit> make_online_fit(const std::vector<const site::Site*>& sites, const OnlineFitOptions& options) {
+  if (sites.empty()) throw UsageError("make_online_fit: no site");
   if (options.core == OnlineFitOptions::Core::kMarginal) {
     std::string why;
     if (!options.marginal.sampler.IsValid(&why)) throw UsageError(why);
-    return std::make_unique<MarginalFit>(site, options.marginal);
+    return std::make_unique<MarginalFit>(sites, options.marginal);
+  }
+  if (sites.size() > 1) {
+    throw UsageError("a fit of several sites runs on the marginal core (each truck's table is built through its own "
+                     "site); the latent core (--core latent, --window, --model with effects) fits one site");
   }
   std::string why;
   if (!options.latent.sampler.IsValid(&why)) throw UsageError(why);
-  return std::make_unique<LatentFit>(site, options.latent);
+  return std::make_unique<LatentFit>(*sites.front(), options.latent);
 }
 
 }  // namespace ssrfleet::fleet

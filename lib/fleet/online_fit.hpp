@@ -76,5 +76,8 @@ struct OnlineFitOptions {
 
 // UsageError if the options are invalid.
 std::unique_ptr<OnlineFit> make_online_fit(const site::Site& site, const OnlineFitOptions& options);
+// One fleet over several sites (fleet/joint_sites.hpp): a record's `site` indexes `sites`, which must
+// outlive the fit. The marginal core only; UsageError for the latent core and more than one site.
+std::unique_ptr<OnlineFit> make_online_fit(const std::vector<const site::Site*>& sites, const OnlineFitOptions& options);
 
 }  // namespace ssrfleet::fleet

@@ -10,6 +10,18 @@
 
 namespace ssrfleet::fleet {
 
+// One site of a fit over several sites (README "Many sites"): what the cloud's top-level site
+// fields hold for a fit of one site, and where its trucks sit in the cloud's speed and mass pool.
+struct CloudSite {
+  std::string name;               // the manifest's name for it
+  std::string fingerprint;        // site::Site::fingerprint()
+  std::string road_name;
+  int sensors = 0;
+  double lateral_min_m = 0.0, lateral_max_m = 0.0;
+  long trucks_seen = 0;
+  std::size_t pool_begin = 0, pool_count = 0;  // speed_mps[pool_begin, pool_begin + pool_count)
+};
+
 struct PosteriorCloud {
   std::string method;             // "smc" or "mcmc"
   Eigen::MatrixXd theta;          // kHyperCount x draws (fleet_model.hpp order)
@@ -29,6 +41,11 @@ struct PosteriorCloud {
   std::string model = "base";
   std::vector<std::string> psi_names;
   Eigen::MatrixXd psi;
+  // A fit over several sites: one entry per site, in the fit's order (empty for a fit of one site).
+  // The top-level site fields then describe the whole: the joint fingerprint (fleet/joint_sites.hpp),
+  // the roads joined by '+', the first site's sensors and lateral range; the pool holds every site's
+  // trucks, site by site.
+  std::vector<CloudSite> sites;
 };
 
 }  // namespace ssrfleet::fleet

@@ -83,6 +83,16 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vect
   j["format_version"] = kFormatVersion;
   j["site"] = {{"fingerprint", c.site_fingerprint}, {"road", c.road_name}, {"sensors", c.sensors},
                {"lateral_min_m", c.lateral_min_m}, {"lateral_max_m", c.lateral_max_m}};
+  if (!c.sites.empty()) {
+    // A fit of several sites: each site as "site" would hold it, its trucks and its part of the pool.
+    nlohmann::json sites = nlohmann::json::array();
+    for (const auto& s : c.sites) {
+      sites.push_back({{"name", s.name}, {"fingerprint", s.fingerprint}, {"road", s.road_name}, {"sensors", s.sensors},
+                       {"lateral_min_m", s.lateral_min_m}, {"lateral_max_m", s.lateral_max_m},
+                       {"trucks_seen", s.trucks_seen}, {"pool", {s.pool_begin, s.pool_count}}});
+    }
+    j["site"]["sites"] = std::move(sites);
+  }
   nlohmann::json theta = nlohmann::json::array();
   for (Eigen::Index i = 0; i < c.theta.cols(); ++i) {
     nlohmann::json row = nlohmann::json::array();
@@ -150,6 +160,60 @@ std::vector<double> finite_array(const nlohmann::json& j, const char* key, const
 }  // namespace
 
 namespace {
+// The sites of a fit over several (posterior_cloud.hpp, CloudSite), after the pool is read: each
+// site's pool a range of it, the ranges in order and covering it, the names distinct.
+void parse_sites(const nlohmann::json& sites, const std::string& path, const std::string& where,
+                 fleet::PosteriorCloud& c) {
+  if (!sites.is_array() || sites.size() < 2) throw DataError(path, 0, where, "must list at least two sites");
+  if (sites.size() > kMaxPosteriorSites) {
+    throw DataError(path, 0, where, "lists " + std::to_string(sites.size()) + " sites, more than this build reads (" +
+                                        std::to_string(kMaxPosteriorSites) + ")");
+  }
+  std::size_t next = 0;
+  long trucks = 0;
+  for (std::size_t i = 0; i < sites.size(); ++i) {
+    const std::string P = where + "[" + std::to_string(i) + "].";
+    const nlohmann::json& e = sites[i];
+    fleet::CloudSite s;
+    s.name = get_field<std::string>(e, "name", path, P);
+    s.fingerprint = get_field<std::string>(e, "fingerprint", path, P);
+    s.road_name = get_field<std::string>(e, "road", path, P);
+    s.sensors = get_field<int>(e, "sensors", path, P);
+    s.lateral_min_m = get_field<double>(e, "lateral_min_m", path, P);
+    s.lateral_max_m = get_field<double>(e, "lateral_max_m", path, P);
+    s.trucks_seen = get_field<long>(e, "trucks_seen", path, P);
+    if (s.name.empty()) throw DataError(path, 0, P + "name", "is empty");
+    for (const auto& other : c.sites) {
+      if (other.name == s.name) throw DataError(path, 0, P + "name", "'" + s.name + "' names two sites");
+    }
+    if (s.sensors < 1 || !(s.lateral_min_m < s.lateral_max_m) || s.trucks_seen < 0) {
+      throw DataError(path, 0, P + "sensors", "impossible site (sensors, lateral range or trucks_seen)");
+    }
+    const auto pool = get_field<std::vector<std::uint64_t>>(e, "pool", path, P);
+    // A site may have no trucks in one vehicle class's fit (its pool is then empty).
+    if (pool.size() != 2 || pool[0] != next || pool[1] > c.speed_mps.size() - next ||
+        (pool[1] == 0) != (s.trucks_seen == 0)) {
+      throw DataError(path, 0, P + "pool",
+                      "must be [first, count]: the site's trucks in cloud.speed_mps, from " + std::to_string(next) +
+                          ", within the " + std::to_string(c.speed_mps.size()) + " there are, none only for a site "
+                          "with no trucks");
+    }
+    s.pool_begin = pool[0];
+    s.pool_count = pool[1];
+    next += s.pool_count;
+    trucks += s.trucks_seen;
+    c.sites.push_back(std::move(s));
+  }
+  if (next != c.speed_mps.size()) {
+    throw DataError(path, 0, where, "the sites' pools hold " + std::to_string(next) + " of the " +
+                                        std::to_string(c.speed_mps.size()) + " trucks in cloud.speed_mps");
+  }
+  if (trucks != c.trucks_seen) {
+    throw DataError(path, 0, where, "the sites' trucks_seen add up to " + std::to_string(trucks) + ", not the file's " +
+                                        std::to_string(c.trucks_seen));
+  }
+}
+
 // One posterior object (the whole single-class file, or one entry of "classes"); P prefixes the
 // fields' names in messages ("" or "classes[i].").
 fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std::string& path, const std::string& P) {
@@ -197,6 +261,7 @@ fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std:
   if (!(total > 0.0)) throw DataError(path, 0, P + "cloud.weights", "all weights are zero");
   c.weights /= total;
   // The model: files written before models existed are the base model's.
+  if (site.contains("sites")) parse_sites(site["sites"], path, P + "site.sites", c);
   c.model = j.contains("model") ? get_field<std::string>(j, "model", path, P) : "base";
   if (c.model.empty()) throw DataError(path, 0, P + "model", "is empty (\"base\" or a model spec)");
   if (c.model != "base" && cloud.contains("psi")) {  // none when the spec fixes every parameter
@@ -259,6 +324,13 @@ nlohmann::json parse_json_file(std::string path) {
   if (std::filesystem::is_directory(path)) path = (std::filesystem::path(path) / "posterior.json").string();
   std::ifstream in(path);
   if (!in) throw MissingInputError("cannot open posterior file '" + path + "'");
+  std::error_code ec;
+  const auto bytes = std::filesystem::file_size(path, ec);
+  if (!ec && bytes > kMaxPosteriorBytes) {
+    throw DataError(path, 0, "size",
+                    std::to_string(bytes) + " bytes, more than a posterior file may hold (" +
+                        std::to_string(kMaxPosteriorBytes) + ")");
+  }
   return parse_json(in, path);
 }
 

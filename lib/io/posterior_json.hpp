@@ -4,6 +4,8 @@
 // summary is computed by fleet::summarise_cloud (fleet/posterior_summary.hpp).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <istream>
 #include <string>
 #include <vector>
@@ -15,6 +17,13 @@
 #include "fleet/vehicle_classes.hpp"
 
 namespace ssrfleet::io {
+
+// What a posterior file may be (README "Input limits"). The default fit (1,024 particles, 10,000
+// trucks in the pool) writes about 0.7 MB; 10^6 particles, about 150 MB. A larger file is refused
+// before a byte is parsed (a DataError naming the file and "size"), not read into memory.
+inline constexpr std::uintmax_t kMaxPosteriorBytes = std::uintmax_t{1} << 30;
+// Sites of a fit over several (site.sites): a road authority's network is tens to hundreds.
+inline constexpr std::size_t kMaxPosteriorSites = 100000;
 
 // The whole file as JSON (summary + cloud). `hyper` is fleet::summarise_cloud(cloud): one entry
 // per hyperparameter (fleet_model.hpp order); `psi` is fleet::summarise_psi(cloud), one entry per

@@ -94,8 +94,10 @@ SiteManifest read_site_manifest(std::istream& in, const std::string& path, const
                       "relative to the manifest's folder)");
     }
     s.sensors = text("sensors");
-    s.log = resolve(folder, text("log"));
-    if (!fs::is_regular_file(s.log)) {
+    // A stream's manifest may leave the logs out: the stream reads one input, its `site` column
+    // naming each record's site. A fit reads each site's log (read_manifest_site_log asks for it).
+    if (e.contains("log")) s.log = resolve(folder, text("log"));
+    if (!s.log.empty() && !fs::is_regular_file(s.log)) {
       throw DataError(path, 0, at + ".log",
                       "site '" + s.name + "': no log file '" + s.log + "' (paths are relative to the manifest's folder)");
     }

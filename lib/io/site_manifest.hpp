@@ -7,7 +7,8 @@
 // fleet, not to a site, so they stay command-line options shared by every site.
 //
 // This file only reads and checks the format: every key known, every field of the right kind, names
-// unique, files present. Building a site from an entry (its road must cover its sensors) is
+// unique, files present (a site's log may be left out: `stream --sites` reads one input with a
+// `site` column; fit asks for each site's log). Building a site from an entry (its road must cover its sensors) is
 // site_of_manifest_entry's job (bin/cli_common.hpp), which names the manifest, site and field too.
 #pragma once
 
@@ -22,7 +23,8 @@ struct ManifestSite {
   std::string name;     // unique in the manifest: one or more of A-Z a-z 0-9 _ . -
   std::string road;     // a preset name, or the road file's path resolved against the manifest's folder
   std::string sensors;  // FIRST_M,SPACING_M,COUNT, as --sensors reads it
-  std::string log;      // the WIM log's path, resolved against the manifest's folder
+  std::string log;      // the WIM log's path, resolved against the manifest's folder; "" if not given
+                        // (a stream's manifest: its one input names each record's site)
   std::size_t index = 0;  // its place in the manifest (fields are named "sites[index].key")
 };
 

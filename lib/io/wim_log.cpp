@@ -46,6 +46,7 @@ WimLogReader::WimLogReader(std::istream& in, std::string source_name, double uns
   mass_col_ = require("sprung_mass_kg");
   time_col_ = column_index(h, "time_s");
   class_col_ = column_index(h, "class");
+  site_col_ = column_index(h, "site");  // read only in a log of several sites (set_sites)
   std::vector<std::string> if_names, force_names;
   const auto if_cols = numbered_columns(h, "if_", if_names);
   const auto force_cols = numbered_columns(h, "force_", force_names);
@@ -62,6 +63,22 @@ WimLogReader::WimLogReader(std::istream& in, std::string source_name, double uns
   sensors_ = static_cast<int>(value_cols_.size());
 }
 
+void WimLogReader::set_sites(std::vector<LogSite> sites) {
+  const std::string& src = csv_.source_name();
+  if (site_col_ < 0) {
+    throw DataError(src, 1, "site", "required column is missing from the header (a log of several sites names each "
+                                    "record's site)");
+  }
+  for (const auto& s : sites) {
+    if (s.sensors > sensors_) {
+      throw DataError(src, 1, value_names_.empty() ? "if_1" : value_names_.back(),
+                      "site '" + s.name + "' has " + std::to_string(s.sensors) + " sensors but the header has " +
+                          std::to_string(sensors_) + " value columns");
+    }
+  }
+  sites_ = std::move(sites);
+}
+
 records::WimRecord WimLogReader::parse(const CsvRow& row) const {
   const std::string& src = csv_.source_name();
   if (row.fields.size() != header_fields_) {
@@ -73,6 +90,21 @@ records::WimRecord WimLogReader::parse(const CsvRow& row) const {
   r.line = row.line;
   r.truck_id = row.fields[static_cast<std::size_t>(id_col_)];
   if (r.truck_id.empty()) throw DataError(src, row.line, "truck_id", "empty truck_id");
+  int sensors = sensors_;
+  if (!sites_.empty()) {
+    const std::string& name = row.fields[static_cast<std::size_t>(site_col_)];
+    const auto it = std::find_if(sites_.begin(), sites_.end(), [&](const LogSite& s) { return s.name == name; });
+    if (it == sites_.end()) {
+      std::string known;
+      for (const auto& s : sites_) known += (known.empty() ? "" : ", ") + s.name;
+      throw DataError(src, row.line, "site",
+                      name.empty() ? "empty: the record names no site (the manifest's sites: " + known + ")"
+                                   : "site '" + name + "' is not one of the manifest's sites (" + known + ")");
+    }
+    r.site = static_cast<std::uint32_t>(it - sites_.begin());
+    sensors = it->sensors;
+    r.truck_id = name + ":" + r.truck_id;  // ids are per site
+  }
   if (seen_.count(r.truck_id)) throw DataError(src, row.line, "truck_id", "duplicate truck_id '" + r.truck_id + "'");
   if (class_col_ >= 0) {
     const std::string& label = row.fields[static_cast<std::size_t>(class_col_)];
@@ -104,8 +136,15 @@ records::WimRecord WimLogReader::parse(const CsvRow& row) const {
                         format_range(limits_.min_sprung_mass_kg, limits_.max_sprung_mass_kg));
   }
   const double static_weight_n = (unsprung_mass_kg_ + r.sprung_mass_kg) * vehicle::gravity_mps2;
-  r.impact_factor.resize(sensors_);
-  for (int m = 0; m < sensors_; ++m) {
+  r.impact_factor.resize(sensors);
+  for (int m = sensors; m < sensors_; ++m) {
+    if (!row.fields[static_cast<std::size_t>(value_cols_[static_cast<std::size_t>(m)])].empty()) {
+      throw DataError(src, row.line, value_names_[static_cast<std::size_t>(m)],
+                      "site '" + sites_[r.site].name + "' has " + std::to_string(sensors) + " sensors: leave " +
+                          value_names_[static_cast<std::size_t>(m)] + " empty");
+    }
+  }
+  for (int m = 0; m < sensors; ++m) {
     const auto& name = value_names_[static_cast<std::size_t>(m)];
     const double v = parse_finite(row.fields[static_cast<std::size_t>(value_cols_[static_cast<std::size_t>(m)])], src,
                                   row.line, name);

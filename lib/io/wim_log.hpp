@@ -1,6 +1,7 @@
 // The WIM-log CSV of DESIGN.md §7: header first, '#' lines are comments. Columns `truck_id`
 // (unique), `time_s` (optional), `class` (optional: the truck's vehicle class, a label of
-// [A-Za-z0-9_.-]+, records/vehicle_class.hpp), `speed_mps`, `sprung_mass_kg`, then either
+// [A-Za-z0-9_.-]+, records/vehicle_class.hpp), `site` (a log of several sites: set_sites),
+// `speed_mps`, `sprung_mass_kg`, then either
 // `if_1`..`if_M` (impact factors) or `force_1`..`force_M` (tyre force, N). Extra columns are ignored.
 //
 // The reader is incremental and never stops on a bad record: it hands the record back as a
@@ -74,6 +75,19 @@ class WimLogReader {
   // `class` (a stream whose classes were fixed when its state was made).
   void set_classes(std::set<std::string> classes) { classes_ = std::move(classes); }
 
+  // A log of several sites (a stream of a site manifest, README "Many sites"): the header must have a
+  // `site` column, and at least as many value columns as the site with the most sensors. A record's
+  // site names one of `sites` (WimRecord::site is its index); it fills its site's first M_s value
+  // columns and leaves the rest empty; its truck id is kept as "SITE:ID", since ids are per site
+  // (the same id at two sites is two trucks). A record of no or an unknown site is rejected, field
+  // `site`. DataError (the header's line, field `site` or the first missing value column) if the
+  // header cannot carry these sites.
+  struct LogSite {
+    std::string name;
+    int sensors = 0;
+  };
+  void set_sites(std::vector<LogSite> sites);
+
  private:
   records::WimRecord parse(const CsvRow& row) const;
 
@@ -89,6 +103,8 @@ class WimLogReader {
   bool forces_ = false;
   std::unordered_set<std::string> seen_;
   std::set<std::string> classes_;
+  long site_col_ = -1;
+  std::vector<LogSite> sites_;  // empty: a log of one site
 };
 
 // Reads a whole log; the first bad record is an error (DataError naming file, line, field).

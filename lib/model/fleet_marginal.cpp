@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <stdexcept>
 #include <vector>
 
 #include <Eigen/Core>
@@ -14,16 +15,23 @@ constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 constexpr double kLog2Pi = 1.8378770664093454836;
 }  // namespace
 
-FleetMarginal::FleetMarginal(int sensors, fleet::LateralRange range, Lattice lattice)
-    : sensors_(sensors), range_(range), lattice_(lattice) {}
+FleetMarginal::FleetMarginal(std::vector<SiteConstants> sites, Lattice lattice)
+    : sites_(std::move(sites)), lattice_(lattice) {
+  if (sites_.empty()) throw std::invalid_argument("FleetMarginal: no site");
+}
 
 ThetaTerms FleetMarginal::prepare(const fleet::HyperVector& theta) const {
   using namespace fleet;
   ThetaTerms t;
   const double sk = theta[kSigmaK], skt = theta[kSigmaKt], sz = theta[kSigmaZ], sif = theta[kSigmaIf];
   if (!(sk > 0.0 && skt > 0.0 && sz > 0.0 && sif > 0.0)) return t;
-  const double log_mass = log_normal_mass(range_.lo_m, range_.hi_m, theta[kZ], sz);
-  if (!std::isfinite(log_mass)) return t;
+  // site_constant holds each site's log P_road until the constants replace it below.
+  std::vector<double>& log_mass = t.site_constant;
+  log_mass.resize(sites_.size());
+  for (std::size_t s = 0; s < sites_.size(); ++s) {
+    log_mass[s] = log_normal_mass(sites_[s].range.lo_m, sites_[s].range.hi_m, theta[kZ], sz);
+    if (!std::isfinite(log_mass[s])) return t;
+  }
   // The rectangle rule needs the population density to be smooth on the node spacing; a fleet sd
   // below kMinSdPerSpacing spacings is evaluated at that floor (see the header).
   const double sk_q = std::max(sk, kMinSdPerSpacing * lattice_.dk_npm);
@@ -37,8 +45,13 @@ ThetaTerms FleetMarginal::prepare(const fleet::HyperVector& theta) const {
   t.u = 1.0 / (sif * sif);
   t.half_u = 0.5 * t.u;
   t.log_u = std::log(t.u);
-  t.constant = 0.5 * sensors_ * (t.log_u - kLog2Pi) - log_mass + std::log(lattice_.dk_npm * lattice_.dkt_npm) -
-               (kLog2Pi + std::log(sk_q) + std::log(skt_q)) - 0.5 * kLog2Pi;
+  // Each site's whole constant, summed in one order for every site (that of the one-site code
+  // before sites existed, so a fit of one site keeps its bits).
+  for (std::size_t s = 0; s < sites_.size(); ++s) {
+    t.site_constant[s] = 0.5 * sites_[s].sensors * (t.log_u - kLog2Pi) - log_mass[s] +
+                         std::log(lattice_.dk_npm * lattice_.dkt_npm) - (kLog2Pi + std::log(sk_q) + std::log(skt_q)) -
+                         0.5 * kLog2Pi;
+  }
   t.inside = true;
   return t;
 }
@@ -88,7 +101,7 @@ double FleetMarginal::log_likelihood(const TableView& table, const ThetaTerms& t
   const float top = n > 0 ? e.maxCoeff() : -std::numeric_limits<float>::infinity();
   if (!(top > -std::numeric_limits<float>::infinity())) return kNegInf;
   const double sum = static_cast<double>((e - top).exp().sum());
-  return t.constant - 0.5 * std::log(t.lateral_var_m2) + static_cast<double>(top) + std::log(sum);
+  return t.site_constant[table.site] - 0.5 * std::log(t.lateral_var_m2) + static_cast<double>(top) + std::log(sum);
 }
 
 void FleetMarginal::sum_log_likelihood(const TableStore& store, std::size_t end, const ThetaTerms* terms,

@@ -10,6 +10,12 @@
 // a_g and β_g are linear in the node's lattice index, so the node sum reads only the table.
 // Everything that depends on θ alone (not on the truck) is computed once per θ (ThetaTerms).
 //
+// Several sites, one fleet (README "Many sites"). A site enters ℓ_i only through its sensor count M
+// and its lane [lo, hi] (P_road), both in the truck-independent part; everything else is in the
+// truck's table, built through the truck's own site. So one FleetMarginal serves trucks of many
+// sites: a constant per site (SiteConstants, ThetaTerms::site_constant), picked by the table's site.
+// (A θ outside one site's support, P_road = 0, is outside the support of all.)
+//
 // The rectangle rule's error is about exp(-2π² (w / Δ)²) for an integrand of width w on spacing Δ:
 // negligible once w ≥ Δ, but a population sd far below Δ would make the node sum jump as K moves
 // between nodes (a rough likelihood no MCMC can cross) and overstate it by Δ / σ when K sits on a
@@ -24,11 +30,19 @@
 // 2,000 times below the 0.5 nats that one posterior sd changes the log density by.
 #pragma once
 
+#include <vector>
+
 #include "model/fleet_model.hpp"
 #include "model/table_store.hpp"
 #include "model/truck_table.hpp"
 
 namespace ssrfleet::model {
+
+// What makes one site's trucks' ℓ_i differ from another's, apart from their tables.
+struct SiteConstants {
+  int sensors = 0;
+  fleet::LateralRange range;
+};
 
 // What ℓ_i(θ) needs of θ, computed once for all trucks.
 struct ThetaTerms {
@@ -37,7 +51,8 @@ struct ThetaTerms {
   double lateral_mean_m = 0.0;
   double lateral_var_m2 = 0.0;
   double u = 0.0, half_u = 0.0, log_u = 0.0;
-  double constant = 0.0;       // the truck-independent part of ℓ_i
+  // The truck-independent part of ℓ_i for a truck of each site (M_s and P_road_s differ by site).
+  std::vector<double> site_constant;
   bool inside = false;         // θ in the support (σ's positive, road mass positive)
 };
 
@@ -45,10 +60,13 @@ class FleetMarginal {
  public:
   static constexpr double kMinSdPerSpacing = 0.8;
 
-  FleetMarginal(int sensors, fleet::LateralRange range, Lattice lattice);
+  FleetMarginal(int sensors, fleet::LateralRange range, Lattice lattice)
+      : FleetMarginal(std::vector<SiteConstants>{{sensors, range}}, lattice) {}
+  // Trucks of several sites (TableView::site indexes `sites`); at least one.
+  FleetMarginal(std::vector<SiteConstants> sites, Lattice lattice);
 
   const Lattice& lattice() const { return lattice_; }
-  int sensors() const { return sensors_; }
+  const std::vector<SiteConstants>& sites() const { return sites_; }
 
   ThetaTerms prepare(const fleet::HyperVector& theta) const;
   // ℓ_i(θ); -inf when θ is outside the support.
@@ -71,8 +89,7 @@ class FleetMarginal {
   static constexpr std::size_t kBlockEntries = 16384;
 
  private:
-  int sensors_;
-  fleet::LateralRange range_;
+  std::vector<SiteConstants> sites_;
   Lattice lattice_;
 };
 

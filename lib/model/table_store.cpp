@@ -19,10 +19,12 @@ void TableStore::reserve(std::size_t trucks, std::size_t nodes) {
   c.offset.reserve(trucks);
   c.count.reserve(trucks);
   c.u_ref.reserve(trucks);
+  c.site.reserve(trucks);
 }
 
-void TableStore::append(const TruckTable& t) {
+void TableStore::append(const TruckTable& t, std::uint32_t site) {
   auto& c = cols_;
+  c.site.push_back(site);
   c.offset.push_back(c.c.size());
   c.count.push_back(static_cast<std::uint32_t>(t.nodes()));
   c.u_ref.push_back(t.u_ref);
@@ -40,7 +42,7 @@ TableView TableStore::view(std::size_t i) const {
   const std::size_t o = c.offset[i];
   return {c.k_index.data() + o, c.kt_index.data() + o, c.c.data() + o,        c.m.data() + o,
           c.b.data() + o,       c.z_mean_m.data() + o, c.z_var_m2.data() + o, c.count[i],
-          c.u_ref[i]};
+          c.u_ref[i],           c.site[i]};
 }
 
 std::size_t TableStore::bytes() const {
@@ -48,7 +50,7 @@ std::size_t TableStore::bytes() const {
   return (c.k_index.capacity() + c.kt_index.capacity()) * sizeof(std::int32_t) +
          (c.c.capacity() + c.m.capacity() + c.b.capacity() + c.z_mean_m.capacity() + c.z_var_m2.capacity()) *
              sizeof(float) +
-         c.offset.capacity() * sizeof(std::uint64_t) + c.count.capacity() * sizeof(std::uint32_t) +
+         c.offset.capacity() * sizeof(std::uint64_t) + (c.count.capacity() + c.site.capacity()) * sizeof(std::uint32_t) +
          c.u_ref.capacity() * sizeof(double);
 }
 

@@ -21,13 +21,15 @@ struct TableView {
   const float* z_var_m2 = nullptr;
   std::size_t nodes = 0;
   double u_ref = 0.0;
+  // Which of the fit's sites logged the truck (FleetMarginal's per-site constants; 0 for one site).
+  std::uint32_t site = 0;
 };
 
 TableView view_of(const TruckTable& table);
 
 class TableStore {
  public:
-  void append(const TruckTable& table);
+  void append(const TruckTable& table, std::uint32_t site = 0);
   std::size_t trucks() const { return cols_.offset.size(); }
   TableView view(std::size_t truck) const;
   std::size_t nodes() const { return cols_.c.size(); }
@@ -41,6 +43,7 @@ class TableStore {
     std::vector<std::uint64_t> offset;
     std::vector<std::uint32_t> count;
     std::vector<double> u_ref;
+    std::vector<std::uint32_t> site;
   };
   Columns& columns() { return cols_; }
   const Columns& columns() const { return cols_; }

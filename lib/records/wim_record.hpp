@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -17,6 +18,7 @@ struct WimRecord {
   double sprung_mass_kg = 0.0;
   Eigen::VectorXd impact_factor;  // one per sensor, in sensor order
   std::string vehicle_class;      // the log's `class` column (records/vehicle_class.hpp); "" = unlabelled
+  std::uint32_t site = 0;         // which of a fit's sites logged it (fleet/joint_sites.hpp); 0 for one site
   std::size_t line = 0;           // where it came from
 };
 

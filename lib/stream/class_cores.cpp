@@ -34,8 +34,8 @@ std::int32_t truck_log_generation(const std::string& path) {
 }
 }  // namespace
 
-ClassCores::ClassCores(const site::Site& site, fleet::OnlineFitOptions options, std::string state_dir)
-    : site_(site), options_(std::move(options)), state_dir_(std::move(state_dir)) {}
+ClassCores::ClassCores(std::vector<const site::Site*> sites, fleet::OnlineFitOptions options, std::string state_dir)
+    : sites_(std::move(sites)), options_(std::move(options)), state_dir_(std::move(state_dir)) {}
 
 std::string ClassCores::truck_log(const std::string& label) const {
   return (fs::path(state_dir_) / (label.empty() ? std::string("trucks.bin") : "trucks." + label + ".bin")).string();
@@ -44,7 +44,7 @@ std::string ClassCores::truck_log(const std::string& label) const {
 ClassCores::Core& ClassCores::make(const std::string& label) {
   fleet::OnlineFitOptions o = options_;
   o.sampler().seed = fleet::class_seed(options_.sampler().seed, label);
-  auto fit = fleet::make_online_fit(site_, o);  // before the map holds an entry for it
+  auto fit = fleet::make_online_fit(sites_, o);  // before the map holds an entry for it
   Core& c = cores_[label];
   c.fit = std::move(fit);
   return c;

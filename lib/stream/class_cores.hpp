@@ -28,7 +28,8 @@ namespace ssrfleet::stream {
 
 class ClassCores {
  public:
-  ClassCores(const site::Site& site, fleet::OnlineFitOptions options, std::string state_dir);
+  // sites: the stream's sites (one, or a manifest's: fleet/joint_sites.hpp), outliving this.
+  ClassCores(std::vector<const site::Site*> sites, fleet::OnlineFitOptions options, std::string state_dir);
 
   // The classes fixed when the state was made (empty = a new label starts a new class).
   const std::set<std::string>& fixed() const { return fixed_; }
@@ -70,7 +71,7 @@ class ClassCores {
   std::string truck_log(const std::string& label) const;
   Core& make(const std::string& label);
 
-  const site::Site& site_;
+  std::vector<const site::Site*> sites_;
   fleet::OnlineFitOptions options_;
   std::string state_dir_;
   std::set<std::string> fixed_;

@@ -1,5 +1,7 @@
 #include "stream/wim_stream.hpp"
 
+#include "fleet/joint_sites.hpp"
+
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -23,23 +25,34 @@ namespace fs = std::filesystem;
 
 namespace {
 std::string path_in(const std::string& dir, const char* name) { return (fs::path(dir) / name).string(); }
+
+// The posteriors of a stream of several sites seen from its first site (its own traffic); one
+// site's as they are.
+fleet::ClassPosteriors at_first_site(fleet::ClassPosteriors classes) {
+  for (auto& c : classes) {
+    if (!c.cloud.sites.empty()) c.cloud = fleet::cloud_at_site(c.cloud, 0);
+  }
+  return classes;
+}
 // The stream checkpoint's header (bookkeeping first, then the core's state, with the marginal
 // core's truck log beside it), sealed with a checksum (binary_io.hpp). Version 4 holds a core per
 // vehicle class (class_cores.hpp), the checkpoint's sequence number (the history names it) and
 // truck logs with a generation header; version 3 recorded the model and carried the checksums;
-// version 2 had neither; version 1 began with the core's own magic word.
+// version 2 had neither; version 1 began with the core's own magic word. Version 5 names the
+// stream's sites after the model (a version-4 state is one unnamed site's, and reads as that).
 constexpr std::uint64_t kStreamMagic = 0x4d52545346525353ULL;       // "SSRFSTRM"
-constexpr std::uint32_t kStreamVersion = 4;
+constexpr std::uint32_t kStreamVersion = 5;
 constexpr std::uint64_t kOldCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
 }  // namespace
 
-WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream* progress, std::ostream& reports)
-    : site_(site),
+WimStream::WimStream(std::vector<StreamSite> sites, StreamOptions options, std::ostream* progress, std::ostream& reports)
+    : sites_(std::move(sites)),
+      site_(sites_.empty() || sites_.front().site == nullptr ? throw UsageError("stream: no site") : *sites_.front().site),
       options_(std::move(options)),
       progress_(progress),
       reports_(reports),
-      cores_(site, options_.fit, options_.state_dir) {
-  fleet::make_online_fit(site, options_.fit);  // UsageError now on bad options, as before classes
+      cores_(site_pointers(), options_.fit, options_.state_dir) {
+  fleet::make_online_fit(site_pointers(), options_.fit);  // UsageError now on bad options, as before classes
   if (options_.state_dir.empty()) throw UsageError("stream: a state directory is required (--state DIR)");
   if (options_.report_every < 0) throw UsageError("stream: --report-every must be >= 0");
   std::error_code ec;
@@ -54,12 +67,35 @@ WimStream::WimStream(const site::Site& site, StreamOptions options, std::ostream
   open_history();
   if (resumed_ && posterior_seq_ != seq_) {
     // posterior.json may lag the checkpoint if the last run failed after the history's commit.
-    write_posterior(cores_.posteriors());
+    write_posterior(posteriors());
   }
   if (resumed_ && progress_) {
     *progress_ << "stream: resumed from " << checkpoint << " with " << cores_.trucks_seen() << " trucks absorbed"
                << (cores_.labelled() ? " in classes " + cores_.labels() : std::string()) << "\n";
   }
+}
+
+std::vector<std::string> WimStream::site_names() const {
+  std::vector<std::string> names;
+  for (const auto& s : sites_) names.push_back(s.name);
+  return names;
+}
+
+std::vector<const site::Site*> WimStream::site_pointers() const {
+  std::vector<const site::Site*> p;
+  for (const auto& s : sites_) {
+    if (s.site == nullptr) throw UsageError("stream: a site is missing");
+    p.push_back(s.site);
+  }
+  return p;
+}
+
+fleet::ClassPosteriors WimStream::posteriors() const {
+  fleet::ClassPosteriors classes = cores_.posteriors();
+  for (auto& c : classes) {
+    for (std::size_t s = 0; s < c.cloud.sites.size() && s < sites_.size(); ++s) c.cloud.sites[s].name = sites_[s].name;
+  }
+  return classes;
 }
 
 void WimStream::restore_checkpoint(const std::string& checkpoint) {
@@ -73,7 +109,7 @@ void WimStream::restore_checkpoint(const std::string& checkpoint) {
   }
   if (magic != kStreamMagic) reader.fail("magic", "not an ssrfleet stream checkpoint");
   const auto version = reader.value<std::uint32_t>("version");
-  if (version != kStreamVersion) {
+  if (version != kStreamVersion && version != 4) {
     const char* what = version == 2 ? " (before checksums and models)"
                        : version == 3 ? " (before vehicle classes and the history)"
                                       : "";
@@ -85,6 +121,23 @@ void WimStream::restore_checkpoint(const std::string& checkpoint) {
   if (state_model != model_text()) {
     reader.fail("model", "the state was written with --model " + state_model + "; resume it with the same model (this "
                          "run asks for " + model_text() + ")");
+  }
+  std::vector<std::string> state_sites{""};
+  if (version >= 5) {
+    const auto n = reader.value<std::uint64_t>("sites");
+    if (n < 1 || n > 100000) reader.fail("sites", "implausible site count " + std::to_string(n));
+    state_sites.clear();
+    for (std::uint64_t s = 0; s < n; ++s) state_sites.push_back(reader.text("site"));
+  }
+  if (state_sites != site_names()) {
+    const auto list = [](const std::vector<std::string>& names) {
+      if (names.size() == 1 && names.front().empty()) return std::string("one site (no manifest)");
+      std::string out = "sites ";
+      for (std::size_t s = 0; s < names.size(); ++s) out += (s ? ", " : "") + names[s];
+      return out;
+    };
+    reader.fail("sites", "the state was made with " + list(state_sites) + "; resume it with the same ones, in the same "
+                         "order (this run has " + list(site_names()) + ")");
   }
   seq_ = reader.value<std::uint64_t>("seq");
   checkpoint_lines_ = reader.value<std::uint64_t>("lines_consumed");
@@ -143,6 +196,8 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
     out.value(kStreamVersion);
     out.text(source);
     out.text(model_text());
+    out.value<std::uint64_t>(sites_.size());
+    for (const auto& site : sites_) out.text(site.name);
     out.value<std::uint64_t>(seq_ + 1);
     out.value<std::uint64_t>(lines_consumed);
     out.value<std::uint64_t>(rejects_bytes_);
@@ -157,10 +212,11 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
 }
 
 void WimStream::write_history_and_posterior(const std::string& source, std::size_t lines_consumed) {
-  const fleet::ClassPosteriors classes = cores_.posteriors();
+  const fleet::ClassPosteriors classes = posteriors();
   const HistoryRowsInput row{.seq = seq_, .source = source, .lines_consumed = lines_consumed,
                              .checkpoint_checksum = checkpoint_checksum_};
-  history_->append(history_rows(classes, site_, options_.history_prediction, row));
+  // Over several sites, the θ summaries are the fleet's and the predictions the first site's.
+  history_->append(history_rows(at_first_site(classes), site_, options_.history_prediction, row));
   write_posterior(classes);
 }
 
@@ -178,10 +234,11 @@ void WimStream::report() const {
   if (cores_.trucks_seen() == 0) return;
   // With classes: the mixture at the observed traffic shares (predict_ssr_mixture; one
   // unlabelled class is predict_ssr itself).
-  const fleet::ClassPosteriors classes = cores_.posteriors();
+  const fleet::ClassPosteriors classes = at_first_site(posteriors());
   const auto prediction =
       predict::predict_ssr_mixture(classes, fleet::observed_shares(classes), site_, {}, options_.prediction);
   reports_ << "# SSR prediction after " << cores_.trucks_seen() << " trucks";
+  if (sites_.size() > 1) reports_ << " of " << sites_.size() << " sites, at site " << sites_.front().name;
   if (cores_.labelled()) reports_ << " (classes " << cores_.labels() << " at their observed shares)";
   reports_ << "\n";
   predict::write_prediction_csv(reports_, prediction);
@@ -190,7 +247,11 @@ void WimStream::report() const {
 
 StreamCounts WimStream::run(std::istream& in, const std::string& source, const std::atomic<bool>& stop) {
   io::WimLogReader reader(in, source, site_.options().unsprung_mass_kg, options_.limits);
-  if (reader.sensors() != site_.sensors()) {
+  if (sites_.size() > 1) {
+    std::vector<io::WimLogReader::LogSite> log_sites;
+    for (const auto& s : sites_) log_sites.push_back({s.name, s.site->sensors()});
+    reader.set_sites(std::move(log_sites));
+  } else if (reader.sensors() != site_.sensors()) {
     throw DataError(source, 1, "if_" + std::to_string(reader.sensors()),
                     "the input has " + std::to_string(reader.sensors()) + " sensors but the site has " +
                         std::to_string(site_.sensors()));

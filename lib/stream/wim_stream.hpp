@@ -91,7 +91,17 @@ class WimStream {
   // Creates the state directory if needed and resumes from its checkpoint if one is there.
   // progress: one line per truck and per rejected record (nullptr = silent); reports: the SSR
   // tables (stdout in the command).
-  WimStream(const site::Site& site, StreamOptions options, std::ostream* progress, std::ostream& reports);
+  WimStream(const site::Site& site, StreamOptions options, std::ostream* progress, std::ostream& reports)
+      : WimStream(std::vector<StreamSite>{{"", &site}}, std::move(options), progress, reports) {}
+  // A stream of several sites, one fleet (README "Many sites"): its input's `site` column names each
+  // record's site (io::WimLogReader::set_sites); the sites must outlive the stream. The history's
+  // predictions and the --report-every tables are at the first site; posterior.json holds every site
+  // (predict --posterior DIR --sites M --site NAME predicts any of them).
+  struct StreamSite {
+    std::string name;  // the manifest's name ("" for a stream of one site)
+    const site::Site* site = nullptr;
+  };
+  WimStream(std::vector<StreamSite> sites, StreamOptions options, std::ostream* progress, std::ostream& reports);
 
   bool resumed() const { return resumed_; }
   // What the user should know about the posterior's quality (fleet::OnlineFit::warning), "" if nothing.
@@ -114,7 +124,13 @@ class WimStream {
   void write_posterior(const fleet::ClassPosteriors& classes);
   void report() const;
 
-  const site::Site& site_;
+  std::vector<const site::Site*> site_pointers() const;
+  std::vector<std::string> site_names() const;
+  // The cores' posteriors with the sites' names (a stream of several sites).
+  fleet::ClassPosteriors posteriors() const;
+
+  std::vector<StreamSite> sites_;
+  const site::Site& site_;  // the first: where the history and the reports predict
   StreamOptions options_;
   std::ostream* progress_;
   std::ostream& reports_;

@@ -1,0 +1,63 @@
+#include "sites_check.hpp"
+
+#include <iomanip>
+#include <memory>
+#include <sstream>
+
+#include "discrepancy/site_conflicts.hpp"
+#include "model/fleet_model.hpp"
+#include "util/errors.hpp"
+
+namespace ssrfleet::cli {
+
+std::string check_site_fleets(const io::SiteManifest& manifest, const SiteFlags& flags, const SiteCheckFlags& check,
+                              std::ostream* progress, std::ostream& messages) {
+  check_particles(check.particles);
+  if (manifest.sites.size() < 2) {
+    throw UsageError("--check compares each site with the others: the manifest '" + manifest.path + "' has one site");
+  }
+  std::vector<std::unique_ptr<site::Site>> sites;
+  std::vector<const site::Site*> pointers;
+  std::vector<std::vector<records::WimRecord>> logs;
+  for (const auto& entry : manifest.sites) {
+    SiteFlags own = flags;
+    sites.push_back(std::make_unique<site::Site>(site_of_manifest_entry(manifest, entry, own, progress)));
+    pointers.push_back(sites.back().get());
+    logs.push_back(read_manifest_site_log(manifest, entry, *sites.back(), own));
+  }
+  discrepancy::SiteConflictOptions o;
+  o.fit.marginal.sampler.particles = check.particles;
+  o.fit.marginal.sampler.threads = check.threads > 0 ? check.threads : smc::TemperedSampler::Options::default_threads();
+  o.fit.marginal.sampler.seed = check.seed;
+  o.alpha = check.alpha;
+  if (progress) o.progress = [&](const std::string& line) { *progress << "ssrfleet sites --check: " << line << "\n"; };
+  const auto conflicts = discrepancy::check_site_conflicts(pointers, logs, o);
+
+  std::ostringstream out;
+  out << std::setprecision(6) << "site,trucks,distance2,p_value,flagged";
+  for (const char* h : {"K", "sigma_k", "Kt", "sigma_kt", "Z", "sigma_z", "sigma_if"}) {
+    out << "," << h << "_alone," << h << "_alone_sd," << h << "_others," << h << "_others_sd";
+  }
+  out << "\n";
+  bool any = false;
+  const double threshold = check.alpha / static_cast<double>(conflicts.size());
+  for (const auto& c : conflicts) {
+    const std::string& name = manifest.sites[c.site].name;
+    out << name << "," << c.trucks << "," << c.distance2 << "," << c.p_value << "," << (c.flagged ? "yes" : "no");
+    for (std::size_t h = 0; h < c.alone_mean.size(); ++h) {
+      out << "," << c.alone_mean[h] << "," << c.alone_sd[h] << "," << c.rest_mean[h] << "," << c.rest_sd[h];
+    }
+    out << "\n";
+    if (c.flagged) {
+      any = true;
+      messages << "ssrfleet sites: site '" << name << "' is flagged: its fleet differs from the other sites' (K "
+               << c.alone_mean[0] << " against " << c.rest_mean[0] << ", K_t " << c.alone_mean[2] << " against "
+               << c.rest_mean[2] << "; D2 = " << c.distance2 << " on 4 degrees of freedom, p = " << c.p_value
+               << " < " << threshold << ")\n";
+    }
+  }
+  if (!any) messages << "ssrfleet sites: no site's fleet differs from the others' (every p >= " << threshold << ")\n";
+  return out.str();
+}
+
+}  // namespace ssrfleet::cli
