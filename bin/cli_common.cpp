@@ -1,5 +1,7 @@
 #include "cli_common.hpp"
 
+#include "fleet/joint_sites.hpp"
+
 #include "io/posterior_json.hpp"
 
 #include <charconv>
@@ -211,7 +213,7 @@ void require_fitted_site(const fleet::PosteriorCloud& cloud, const std::string& 
 }
 
 ClassSelection select_posterior_classes(const std::string& source, const std::string& class_label,
-                                        const std::string& mix_text) {
+                                        const std::string& mix_text, const std::string& site_name) {
   if (!class_label.empty() && !mix_text.empty()) throw UsageError("give --class or --mix, not both");
   fleet::ClassPosteriors classes = io::read_posterior_classes(source);
   if (fleet::unlabelled(classes) && (!class_label.empty() || !mix_text.empty())) {
@@ -219,7 +221,20 @@ ClassSelection select_posterior_classes(const std::string& source, const std::st
                      "' has no vehicle classes (its log had no class column)");
   }
   if (!class_label.empty()) classes = fleet::select_class(classes, class_label);
-  std::vector<double> shares = fleet::class_shares(classes, fleet::parse_mix(mix_text));
+  // A posterior of several sites seen from one: each class's own traffic there, and (unless --mix
+  // says otherwise) the classes' shares of that site's trucks; a site with no trucks yet (a young
+  // stream) keeps every site's.
+  const fleet::ClassPosteriors whole = classes;
+  long at_site = 0;
+  if (!site_name.empty()) {
+    for (auto& c : classes) {
+      if (c.cloud.sites.empty()) continue;
+      c.cloud = fleet::cloud_at_site(c.cloud, fleet::find_cloud_site(c.cloud, site_name, source));
+      at_site += c.cloud.trucks_seen;
+    }
+  }
+  std::vector<double> shares =
+      fleet::class_shares(at_site > 0 || site_name.empty() ? classes : whole, fleet::parse_mix(mix_text));
   return {std::move(classes), std::move(shares)};
 }
 

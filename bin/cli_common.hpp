@@ -86,7 +86,10 @@ struct ClassSelection {
   fleet::ClassPosteriors classes;
   std::vector<double> shares;
 };
+// site_name: a site of a posterior of several sites (fit --sites): each class narrowed to it
+// (fleet::cloud_at_site) and the observed shares those of its trucks; a posterior of one site is
+// left as it is (its site is checked against the road by the caller).
 ClassSelection select_posterior_classes(const std::string& source, const std::string& class_label,
-                                        const std::string& mix_text);
+                                        const std::string& mix_text, const std::string& site_name = "");
 
 }  // namespace ssrfleet::cli

@@ -71,16 +71,12 @@ int run_predict(int argc, const char* const argv[]) {
   }
   options.seed = parse_seed(seed_text);
   options.traffic_bootstrap = !fixed_traffic;
-  ClassSelection selection = select_posterior_classes(posterior_path, class_label, mix_text);
-  fleet::ClassPosteriors& classes = selection.classes;
+  // A posterior of several sites seen from the site asked for: its own traffic, class shares and
+  // fingerprint.
+  const ClassSelection selection = select_posterior_classes(posterior_path, class_label, mix_text, site_name);
+  const fleet::ClassPosteriors& classes = selection.classes;
   const std::vector<double>& shares = selection.shares;
   const site::Site site = predict_site(manifest_path, site_name, road, vm, site_flags);
-  // A posterior of several sites seen from the site asked for: its own traffic and fingerprint.
-  if (!site_name.empty()) {
-    for (auto& c : classes) {
-      if (!c.cloud.sites.empty()) c.cloud = fleet::cloud_at_site(c.cloud, fleet::find_cloud_site(c.cloud, site_name, posterior_path));
-    }
-  }
   const fleet::PosteriorCloud& cloud = classes.front().cloud;
   if (!new_road) {
     require_fitted_site(cloud, posterior_path, site,

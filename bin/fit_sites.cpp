@@ -35,6 +35,8 @@ void fit_manifest_sites(const JointFitRequest& request, const FitFlags& fit, con
     sites.push_back(std::make_unique<site::Site>(site_of_manifest_entry(manifest, entry, flags, &std::cerr)));
     site_ptrs.push_back(sites.back().get());
     per_site.push_back(read_manifest_site_log(manifest, entry, *sites.back(), flags, limits));
+    // Ids are per site (the same id at two sites is two trucks): kept as SITE:ID, as a stream does.
+    for (auto& r : per_site.back()) r.truck_id = entry.name + ":" + r.truck_id;
     if (progress) {
       *progress << "ssrfleet fit: site " << entry.name << ": " << per_site.back().size() << " trucks from "
                 << entry.log << ", road " << sites.back()->surface().name << ", " << sites.back()->sensors()

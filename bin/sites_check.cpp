@@ -34,7 +34,7 @@ std::string check_site_fleets(const io::SiteManifest& manifest, const SiteFlags&
   const auto conflicts = discrepancy::check_site_conflicts(pointers, logs, o);
 
   std::ostringstream out;
-  out << std::setprecision(6) << "site,trucks,distance2,p_value,flagged";
+  out << std::setprecision(6) << "site,trucks,round,distance2,p_value,flagged";
   for (const char* h : {"K", "sigma_k", "Kt", "sigma_kt", "Z", "sigma_z", "sigma_if"}) {
     out << "," << h << "_alone," << h << "_alone_sd," << h << "_others," << h << "_others_sd";
   }
@@ -43,7 +43,8 @@ std::string check_site_fleets(const io::SiteManifest& manifest, const SiteFlags&
   const double threshold = check.alpha / static_cast<double>(conflicts.size());
   for (const auto& c : conflicts) {
     const std::string& name = manifest.sites[c.site].name;
-    out << name << "," << c.trucks << "," << c.distance2 << "," << c.p_value << "," << (c.flagged ? "yes" : "no");
+    out << name << "," << c.trucks << "," << c.round << "," << c.distance2 << "," << c.p_value << ","
+        << (c.flagged ? "yes" : c.undecided ? "undecided" : "no");
     for (std::size_t h = 0; h < c.alone_mean.size(); ++h) {
       out << "," << c.alone_mean[h] << "," << c.alone_sd[h] << "," << c.rest_mean[h] << "," << c.rest_sd[h];
     }
@@ -56,7 +57,16 @@ std::string check_site_fleets(const io::SiteManifest& manifest, const SiteFlags&
                << " < " << threshold << ")\n";
     }
   }
-  if (!any) messages << "ssrfleet sites: no site's fleet differs from the others' (every p >= " << threshold << ")\n";
+  std::string undecided;
+  for (const auto& c : conflicts) {
+    if (c.undecided) undecided += (undecided.empty() ? "'" : " and '") + manifest.sites[c.site].name + "'";
+  }
+  if (!undecided.empty()) {
+    messages << "ssrfleet sites: sites " << undecided << " conflict (p < " << threshold
+             << "), but two sites cannot say which of them differs: add a third site of the same fleet\n";
+  } else if (!any) {
+    messages << "ssrfleet sites: no site's fleet differs from the others' (every p >= " << threshold << ")\n";
+  }
   return out.str();
 }
 

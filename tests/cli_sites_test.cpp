@@ -290,7 +290,7 @@ TEST_CASE("sites --check writes a row per site with its conflict p-value and nam
   io::CsvRow row;
   REQUIRE(csv.next(row));
   const auto header = row.fields;
-  CHECK(header.size() == 5 + 7 * 4);
+  CHECK(header.size() == 6 + 7 * 4);
   const auto p_col = static_cast<std::size_t>(io::column_index(header, "p_value"));
   const auto flag_col = static_cast<std::size_t>(io::column_index(header, "flagged"));
   std::vector<std::string> sites;

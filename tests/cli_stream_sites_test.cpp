@@ -231,3 +231,139 @@ TEST_CASE("a stream state of one site written before states named their sites (f
   REQUIRE(resumed.status == 0);
   CHECK(test::read_text(state + "/posterior.json") == test::read_text(dir.file("straight") + "/posterior.json"));
 }
+
+TEST_CASE("a stream of a one-site manifest reads the site column too, and quarantines a record of another site",
+          "[cli][stream][sites]") {
+  TwoSiteStream s;
+  test::write_text(s.manifest, R"({"sites": [{"name": "north", "road": "AS1", "sensors": "76,1.5,16"}]})");
+  // north's and south's records: south's are another site's, not north's trucks.
+  const auto r = s.stream(s.dir.file("state"), s.input(s.lines, "in.csv"));
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  CHECK(r.err.find("12 trucks absorbed, 12 rejected") != std::string::npos);
+  CHECK(test::read_text(s.dir.file("state") + "/rejects.csv").find("site 'south' is not one of the manifest's sites (north)") !=
+        std::string::npos);
+  CHECK(io::read_posterior_file(s.dir.file("state")).trucks_seen == 12);
+}
+
+namespace {
+// The end of the sealed record that starts at `begin` (binary_io.hpp: a running FNV-1a 64 of the
+// record's bytes, then that hash): the first offset where the next 8 bytes are the hash so far.
+std::size_t sealed_record_end(const std::string& bytes, std::size_t begin) {
+  std::uint64_t h = detail::kFnvOffset;
+  for (std::size_t at = begin; at + 8 <= bytes.size(); ++at) {
+    std::uint64_t stored = 0;
+    std::memcpy(&stored, bytes.data() + at, 8);
+    if (at > begin && stored == h) return at;
+    h = detail::fnv1a(h, bytes.data() + at, 1);
+  }
+  FAIL("no seal after offset " << begin);
+  return 0;
+}
+void seal_again(std::string& bytes, std::size_t begin, std::size_t seal_at) {
+  const std::uint64_t h = detail::fnv1a(detail::kFnvOffset, bytes.data() + begin, seal_at - begin);
+  std::memcpy(bytes.data() + seal_at, &h, 8);
+}
+}  // namespace
+
+TEST_CASE("a stream state written before sites (stream format 4, truck records without a site) resumes exactly, "
+          "its truck log written anew",
+          "[cli][stream][sites]") {
+  test::TempDir dir;
+  REQUIRE(run_ssrfleet("simulate --road AS1 --trucks 8 --seed 9 --quiet --out " + q(dir.file("log.csv")), dir).status == 0);
+  std::string head;
+  {
+    std::istringstream in(test::read_text(dir.file("log.csv")));
+    std::string line;
+    int lines = 0;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line[0] != '#' && ++lines > 5) break;  // the header and 4 trucks
+      head += line + "\n";
+    }
+  }
+  test::write_text(dir.file("head.csv"), head);
+  const auto stream = [&](const std::string& state, const std::string& input) {
+    return run_ssrfleet("stream --state " + q(state) + " --input " + q(input) + " --particles 64 --threads 1 --seed 2 --quiet",
+                        dir);
+  };
+  REQUIRE(stream(dir.file("straight"), dir.file("log.csv")).status == 0);
+  const std::string state = dir.file("old");
+  REQUIRE(stream(state, dir.file("head.csv")).status == 0);
+
+  // The truck log: a sealed header (magic, generation), then per truck a sealed record that starts
+  // with its id (a length and the bytes) and, from marginal target format 3 on, the site's index.
+  std::string log = test::read_text(state + "/trucks.bin");
+  std::size_t at = sealed_record_end(log, 0) + 8;
+  int records = 0;
+  while (at < log.size()) {
+    std::uint64_t id_length = 0;
+    std::memcpy(&id_length, log.data() + at, 8);
+    const std::size_t site_at = at + 8 + id_length;
+    REQUIRE(log.substr(site_at, 4) == std::string(4, '\0'));
+    const std::size_t end = sealed_record_end(log, at);
+    log.erase(site_at, 4);
+    seal_again(log, at, end - 4);
+    at = end - 4 + 8;
+    ++records;
+  }
+  REQUIRE(records == 4);
+  test::write_text(state + "/trucks.bin", log);
+
+  // The checkpoint: stream format 4 (no site list after the model), marginal target format 2.
+  std::string bytes = test::read_text(state + "/checkpoint.bin");
+  std::size_t pos = 8 + 4;
+  for (int text = 0; text < 2; ++text) {  // source, model
+    std::uint64_t n = 0;
+    std::memcpy(&n, bytes.data() + pos, 8);
+    pos += 8 + n;
+  }
+  bytes.erase(pos, 16);  // a count of 1 and one empty name
+  // Then seq, lines consumed, rejects' bytes, the split flag, the fixed classes (none), the classes
+  // (one, unlabelled: an empty label), its trucks written and its truck log's length, 16 bytes less.
+  const std::size_t log_bytes_at = pos + 8 + 8 + 8 + 1 + 8 + 8 + 8 + 8;
+  std::uint64_t log_bytes = 0;
+  std::memcpy(&log_bytes, bytes.data() + log_bytes_at, 8);
+  REQUIRE(log_bytes == log.size() + 4 * 4);
+  log_bytes = log.size();
+  std::memcpy(bytes.data() + log_bytes_at, &log_bytes, 8);
+  const std::uint32_t v4 = 4, v2 = 2;
+  std::memcpy(bytes.data() + 8, &v4, 4);
+  const std::uint64_t target_magic = 0x4e52414d46525353ULL;  // "SSRFMARN"
+  const std::size_t target = bytes.find(std::string(reinterpret_cast<const char*>(&target_magic), 8));
+  REQUIRE(target != std::string::npos);
+  std::memcpy(bytes.data() + target + 8, &v2, 4);
+  seal_again(bytes, 0, bytes.size() - 8);
+  test::write_text(state + "/checkpoint.bin", bytes);
+  // The history's last report names the checkpoint by its seal.
+  std::uint64_t seal = 0;
+  std::memcpy(&seal, bytes.data() + bytes.size() - 8, 8);
+  const std::string history = state + "/history.sqlite";
+  records::HistoryReport last;
+  {
+    const io::HistoryDb db(history, "base");
+    last = db.read_report(4);
+  }
+  last.checkpoint_checksum = seal;
+  REQUIRE(std::system(("sqlite3 " + q(history) + " 'DELETE FROM predictions WHERE seq = 4; DELETE FROM hyperparameters "
+                       "WHERE seq = 4; DELETE FROM reports WHERE seq = 4;'").c_str()) == 0);
+  io::HistoryDb(history, "base").append(last);
+
+  const auto resumed = stream(state, dir.file("log.csv"));
+  INFO(resumed.err);
+  REQUIRE(resumed.status == 0);
+  CHECK(resumed.err.find("4 trucks absorbed") != std::string::npos);
+  const std::string expected = test::read_text(dir.file("straight") + "/posterior.json");
+  CHECK(test::read_text(state + "/posterior.json") == expected);
+  // The log was written anew in this build's records, under a generation of its own.
+  const std::string rewritten = test::read_text(state + "/trucks.bin");
+  std::int32_t generation = 0;
+  std::memcpy(&generation, rewritten.data() + 8, 4);
+  CHECK(generation >= (1 << 24));
+  CHECK(rewritten.size() == test::read_text(dir.file("straight") + "/trucks.bin").size());
+  // And it resumes again, as any state of this build.
+  const auto again = stream(state, dir.file("log.csv"));
+  INFO(again.err);
+  REQUIRE(again.status == 0);
+  CHECK(again.err.find("0 trucks absorbed, 0 rejected") != std::string::npos);
+  CHECK(test::read_text(state + "/posterior.json") == expected);
+}

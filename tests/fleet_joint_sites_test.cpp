@@ -252,12 +252,14 @@ TEST_CASE("cloud_at_site narrows a joint posterior to one site's traffic and fin
   const auto south = fleet::cloud_at_site(c, fleet::find_cloud_site(c, "south", "p.json"));
   CHECK(south.speed_mps == std::vector<double>{23, 24});
   CHECK(south.sprung_mass_kg == std::vector<double>{4300, 4400});
+  CHECK(south.trucks_seen == 2);  // its own trucks: a class's share at the site
   CHECK(south.site_fingerprint == "fb");
   CHECK(south.sensors == 8);
   CHECK(south.lateral_min_m == 0.2);
   CHECK(south.sites.empty());
   // A site with no trucks of its own (in this vehicle class): every site's traffic.
   CHECK(fleet::cloud_at_site(c, 2).speed_mps == c.speed_mps);
+  CHECK(fleet::cloud_at_site(c, 2).trucks_seen == 0);
   CHECK_THROWS_WITH(fleet::find_cloud_site(c, "east", "p.json"), Catch::Contains("north, south, west"));
   fleet::PosteriorCloud one;
   CHECK_THROWS_WITH(fleet::find_cloud_site(one, "east", "p.json"), Catch::Contains("one site"));

@@ -198,6 +198,24 @@ TEST_CASE("a posterior of several sites lists them and reads back, and a site li
   refused([](auto& c) { c.sites[0].sensors = 0; }, "site.sites[0].sensors");
   refused([](auto& c) { c.sites.pop_back(); c.sites[0].pool_count = 5; c.sites[0].trucks_seen = 9; }, "site.sites");
   refused([](auto& c) { c.sites[1].trucks_seen = 0; }, "site.sites[1].pool");  // no trucks, yet a pool
+  refused([](auto& c) { c.sites[0].trucks_seen = 10; }, "site.sites[0].trucks_seen");  // more than the file's
+
+  // Values a writer never makes, edited in (the checksum taken out): refused by field, never cast.
+  const auto edited = [&](const std::function<void(nlohmann::json&)>& edit, const std::string& field) {
+    write(path, cloud);
+    auto j = nlohmann::json::parse(test::read_text(path));
+    j.erase("checksum");
+    edit(j);
+    test::write_text(path, j.dump());
+    const auto e = test::data_error([&] { io::read_posterior_file(path); });
+    REQUIRE(e);
+    CHECK(e->field() == field);
+  };
+  edited([](auto& j) { j["site"]["sites"][1]["pool"] = {3, 1e300}; }, "site.sites[1].pool.count");
+  edited([](auto& j) { j["site"]["sites"][1]["pool"] = {2.9, 2}; }, "site.sites[1].pool.first");
+  edited([](auto& j) { j["site"]["sites"][1]["pool"] = {3, -2}; }, "site.sites[1].pool.count");
+  edited([](auto& j) { j["site"]["sites"][1]["pool"] = 3; }, "site.sites[1].pool");
+  edited([](auto& j) { j["site"]["sites"][0]["trucks_seen"] = 4611686018427387904LL; }, "site.sites[0].trucks_seen");
 }
 
 TEST_CASE("a posterior file over the size limit is refused before it is parsed", "[io][posterior]") {

@@ -106,13 +106,19 @@ std::vector<SiteConflict> check_site_conflicts(const std::vector<const site::Sit
       c.p_value = chi2_4_tail(c.distance2);
     }
     // The worst site of the round, if flagged, is named and taken out; the rest are checked again.
+    // Two sites cannot say which of them differs: a conflict between them marks both, flags neither.
+    const double threshold = options.alpha / static_cast<double>(S);
     std::size_t worst = in.front();
     for (const std::size_t s : in)
       if (out[s].distance2 > out[worst].distance2) worst = s;
-    if (!(out[worst].p_value < options.alpha / static_cast<double>(S))) break;
+    if (!(out[worst].p_value < threshold)) break;
+    if (in.size() == 2) {
+      for (const std::size_t s : in) out[s].undecided = true;
+      break;
+    }
     out[worst].flagged = true;
     in.erase(std::find(in.begin(), in.end(), worst));
-    if (in.size() < 3) break;  // two sites cannot say which of them differs
+    if (in.size() < 2) break;
   }
   return out;
 }

@@ -18,8 +18,9 @@
 // One odd site also pulls every "other sites" posterior it is part of, so a sound site's check can
 // fail beside it (swamping). So the check runs in rounds: each round checks every site still in;
 // if the largest D² is flagged, that site is named, taken out, and the rest checked again, until no
-// site is flagged or two sites remain (two sites cannot say which of them differs). A site keeps
-// the figures of the last round it was checked in.
+// site is flagged. Two sites cannot say which of them differs: when the last two (or the only two)
+// conflict, both are marked undecided and neither is named. A site keeps the figures of the last
+// round it was checked in.
 //
 // Cost: 2S fits per round on the marginal core, of n_s and N - n_s trucks; rounds = flagged + 1.
 #pragma once
@@ -51,6 +52,9 @@ struct SiteConflict {
   double distance2 = 0.0;  // D² on the 4 stiffness hyperparameters
   double p_value = 1.0;
   bool flagged = false;
+  // The last two sites left conflict (p below the threshold), but two cannot say which differs: both
+  // are marked, neither flagged (a check of two sites ends so too).
+  bool undecided = false;
   int round = 1;            // the round these figures come from (flagged: the round it was named in)
   std::size_t compared_with = 0;  // how many other sites its "other sites" fit held
 };

@@ -51,6 +51,8 @@ PosteriorCloud cloud_at_site(const PosteriorCloud& cloud, std::size_t site) {
     out.speed_mps.assign(cloud.speed_mps.begin() + b, cloud.speed_mps.begin() + e);
     out.sprung_mass_kg.assign(cloud.sprung_mass_kg.begin() + b, cloud.sprung_mass_kg.begin() + e);
   }
+  // Its own trucks: a class's share at this site is its trucks there.
+  out.trucks_seen = s.trucks_seen;
   out.site_fingerprint = s.fingerprint;
   out.road_name = s.road_name;
   out.sensors = s.sensors;

@@ -100,6 +100,9 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
     population_at_rebuild_ = in.value<model::TruckTableOptions::Population>("population at rebuild");
   trucks_at_last_rebuild_ = in.value<std::int64_t>("trucks at last rebuild");
   rebuilds_ = in.value<std::int32_t>("rebuilds");
+  // Rebuilds are spaced geometrically in n (at most ~50 below 1e8 trucks); a count outside this
+  // range is damage (and would overflow the migrated generation, marginal_smc.hpp).
+  if (rebuilds_ < 0 || rebuilds_ > 1'000'000) in.fail("rebuilds", "implausible rebuild count " + std::to_string(rebuilds_));
   passes_ = in.value<std::int64_t>("passes");
   frozen_.reset();
   frozen_until_ = 0;

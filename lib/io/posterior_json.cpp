@@ -9,6 +9,8 @@
 #include <limits>
 #include <stdexcept>
 #include <type_traits>
+#include <unordered_set>
+#include <utility>
 
 #include "io/atomic_file.hpp"
 #include "model/fleet_model.hpp"
@@ -133,8 +135,8 @@ T get_field(const nlohmann::json& j, const char* key, const std::string& file, c
     // (UBSan, found by fuzz/posterior_json_fuzzer): take whole numbers in T's range only.
     const bool fits = v.is_number_unsigned()
                           ? v.get<std::uint64_t>() <= static_cast<std::uint64_t>(std::numeric_limits<T>::max())
-                          : v.is_number_integer() && v.get<std::int64_t>() >= std::numeric_limits<T>::min() &&
-                                v.get<std::int64_t>() <= std::numeric_limits<T>::max();
+                          : v.is_number_integer() && std::cmp_greater_equal(v.get<std::int64_t>(), std::numeric_limits<T>::min()) &&
+                                std::cmp_less_equal(v.get<std::int64_t>(), std::numeric_limits<T>::max());
     if (!fits) {
       throw DataError(file, 0, where + key,
                       "must be a whole number from " + std::to_string(std::numeric_limits<T>::min()) + " to " +
@@ -171,6 +173,7 @@ void parse_sites(const nlohmann::json& sites, const std::string& path, const std
   }
   std::size_t next = 0;
   long trucks = 0;
+  std::unordered_set<std::string> names;
   for (std::size_t i = 0; i < sites.size(); ++i) {
     const std::string P = where + "[" + std::to_string(i) + "].";
     const nlohmann::json& e = sites[i];
@@ -183,15 +186,24 @@ void parse_sites(const nlohmann::json& sites, const std::string& path, const std
     s.lateral_max_m = get_field<double>(e, "lateral_max_m", path, P);
     s.trucks_seen = get_field<long>(e, "trucks_seen", path, P);
     if (s.name.empty()) throw DataError(path, 0, P + "name", "is empty");
-    for (const auto& other : c.sites) {
-      if (other.name == s.name) throw DataError(path, 0, P + "name", "'" + s.name + "' names two sites");
+    if (!names.insert(s.name).second) throw DataError(path, 0, P + "name", "'" + s.name + "' names two sites");
+    if (s.sensors < 1 || !(s.lateral_min_m < s.lateral_max_m)) {
+      throw DataError(path, 0, P + "sensors", "impossible site (sensors or lateral range)");
     }
-    if (s.sensors < 1 || !(s.lateral_min_m < s.lateral_max_m) || s.trucks_seen < 0) {
-      throw DataError(path, 0, P + "sensors", "impossible site (sensors, lateral range or trucks_seen)");
+    // The sites' trucks add up to the file's: each at most what the others leave (no overflow).
+    if (s.trucks_seen < 0 || c.trucks_seen < trucks || s.trucks_seen > c.trucks_seen - trucks) {
+      throw DataError(path, 0, P + "trucks_seen", "must be from 0 to the file's trucks_seen less the sites before it");
     }
-    const auto pool = get_field<std::vector<std::uint64_t>>(e, "pool", path, P);
+    // Two whole numbers, each through get_field's range check (a cast of 1e300 would be undefined).
+    const nlohmann::json& pool_json = e.contains("pool") ? e["pool"] : nlohmann::json();
+    if (!pool_json.is_array() || pool_json.size() != 2) {
+      throw DataError(path, 0, P + "pool", "must be [first, count]: the site's trucks in cloud.speed_mps");
+    }
+    const nlohmann::json pool_object = {{"first", pool_json[0]}, {"count", pool_json[1]}};
+    const std::uint64_t pool[2] = {get_field<std::uint64_t>(pool_object, "first", path, P + "pool."),
+                                   get_field<std::uint64_t>(pool_object, "count", path, P + "pool.")};
     // A site may have no trucks in one vehicle class's fit (its pool is then empty).
-    if (pool.size() != 2 || pool[0] != next || pool[1] > c.speed_mps.size() - next ||
+    if (pool[0] != next || pool[1] > c.speed_mps.size() - next ||
         (pool[1] == 0) != (s.trucks_seen == 0)) {
       throw DataError(path, 0, P + "pool",
                       "must be [first, count]: the site's trucks in cloud.speed_mps, from " + std::to_string(next) +

@@ -34,6 +34,7 @@ WimLogReader::WimLogReader(std::istream& in, std::string source_name, double uns
   CsvRow header;
   if (!csv_.next(header)) throw DataError(csv_.source_name(), 1, "header", "empty file: no header line");
   header_raw_ = header.raw;
+  header_line_ = header.line;
   header_fields_ = header.fields.size();
   const auto& h = header.fields;
   const auto require = [&](const char* name) {
@@ -66,12 +67,12 @@ WimLogReader::WimLogReader(std::istream& in, std::string source_name, double uns
 void WimLogReader::set_sites(std::vector<LogSite> sites) {
   const std::string& src = csv_.source_name();
   if (site_col_ < 0) {
-    throw DataError(src, 1, "site", "required column is missing from the header (a log of several sites names each "
-                                    "record's site)");
+    throw DataError(src, header_line_, "site",
+                    "required column is missing from the header (a log of several sites names each record's site)");
   }
   for (const auto& s : sites) {
     if (s.sensors > sensors_) {
-      throw DataError(src, 1, value_names_.empty() ? "if_1" : value_names_.back(),
+      throw DataError(src, header_line_, std::string(forces_ ? "force_" : "if_") + std::to_string(sensors_ + 1),
                       "site '" + s.name + "' has " + std::to_string(s.sensors) + " sensors but the header has " +
                           std::to_string(sensors_) + " value columns");
     }

@@ -95,6 +95,7 @@ class WimLogReader {
   double unsprung_mass_kg_;
   WimLimits limits_;
   std::string header_raw_;
+  std::size_t header_line_ = 1;
   std::size_t header_fields_ = 0;
   long id_col_ = -1, time_col_ = -1, class_col_ = -1, speed_col_ = -1, mass_col_ = -1;
   std::vector<long> value_cols_;

@@ -12,7 +12,8 @@
 namespace ssrfleet::stream {
 
 records::HistoryReport history_rows(const fleet::ClassPosteriors& classes, const site::Site& site,
-                                    const predict::PredictionOptions& options, const HistoryRowsInput& input) {
+                                    const predict::PredictionOptions& options, const HistoryRowsInput& input,
+                                    const fleet::ClassPosteriors* at_site) {
   records::HistoryReport r;
   r.seq = input.seq;
   r.time_s = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
@@ -37,7 +38,8 @@ records::HistoryReport history_rows(const fleet::ClassPosteriors& classes, const
   if (classes.empty()) r.ess = 0.0;
   predict::PredictionOptions seeded = options;
   seeded.seed = options.seed + input.seq;
-  const auto p = predict::predict_ssr_mixture(classes, fleet::observed_shares(classes), site, {}, seeded);
+  const fleet::ClassPosteriors& predicted = at_site != nullptr ? *at_site : classes;
+  const auto p = predict::predict_ssr_mixture(predicted, fleet::observed_shares(predicted), site, {}, seeded);
   for (std::size_t i = 0; i < p.position_m.size(); ++i) {
     const auto j = static_cast<Eigen::Index>(i);
     r.predictions.push_back({p.position_m[i], p.mean_if(j), p.lower95(j), p.upper95(j), p.mean_lower95(j),

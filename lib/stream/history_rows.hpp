@@ -23,7 +23,10 @@ struct HistoryRowsInput {
 };
 
 // The prediction's seed is options.seed + seq: every checkpoint's prediction is reproducible.
+// The trucks and hyperparameter summaries come from `classes`; the prediction at `site` from
+// `at_site` when given (a stream of several sites: the classes seen from that site, fleet::cloud_at_site).
 records::HistoryReport history_rows(const fleet::ClassPosteriors& classes, const site::Site& site,
-                                    const predict::PredictionOptions& options, const HistoryRowsInput& input);
+                                    const predict::PredictionOptions& options, const HistoryRowsInput& input,
+                                    const fleet::ClassPosteriors* at_site = nullptr);
 
 }  // namespace ssrfleet::stream

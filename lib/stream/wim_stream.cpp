@@ -26,11 +26,18 @@ namespace fs = std::filesystem;
 namespace {
 std::string path_in(const std::string& dir, const char* name) { return (fs::path(dir) / name).string(); }
 
-// The posteriors of a stream of several sites seen from its first site (its own traffic); one
-// site's as they are.
+// The posteriors of a stream of several sites seen from its first site (its own traffic and class
+// shares; the whole's shares while it has no trucks yet); one site's as they are.
 fleet::ClassPosteriors at_first_site(fleet::ClassPosteriors classes) {
+  const fleet::ClassPosteriors whole = classes;
+  long at_site = 0;
   for (auto& c : classes) {
-    if (!c.cloud.sites.empty()) c.cloud = fleet::cloud_at_site(c.cloud, 0);
+    if (c.cloud.sites.empty()) return classes;
+    c.cloud = fleet::cloud_at_site(c.cloud, 0);
+    at_site += c.cloud.trucks_seen;
+  }
+  if (at_site == 0) {
+    for (std::size_t k = 0; k < classes.size(); ++k) classes[k].cloud.trucks_seen = whole[k].cloud.trucks_seen;
   }
   return classes;
 }
@@ -215,8 +222,9 @@ void WimStream::write_history_and_posterior(const std::string& source, std::size
   const fleet::ClassPosteriors classes = posteriors();
   const HistoryRowsInput row{.seq = seq_, .source = source, .lines_consumed = lines_consumed,
                              .checkpoint_checksum = checkpoint_checksum_};
-  // Over several sites, the θ summaries are the fleet's and the predictions the first site's.
-  history_->append(history_rows(at_first_site(classes), site_, options_.history_prediction, row));
+  // Over several sites, the trucks and θ summaries are the fleet's, the predictions the first site's.
+  const fleet::ClassPosteriors first = at_first_site(classes);
+  history_->append(history_rows(classes, site_, options_.history_prediction, row, &first));
   write_posterior(classes);
 }
 
@@ -247,7 +255,7 @@ void WimStream::report() const {
 
 StreamCounts WimStream::run(std::istream& in, const std::string& source, const std::atomic<bool>& stop) {
   io::WimLogReader reader(in, source, site_.options().unsprung_mass_kg, options_.limits);
-  if (sites_.size() > 1) {
+  if (sites_.size() > 1 || !sites_.front().name.empty()) {  // a manifest's sites, even one
     std::vector<io::WimLogReader::LogSite> log_sites;
     for (const auto& s : sites_) log_sites.push_back({s.name, s.site->sensors()});
     reader.set_sites(std::move(log_sites));
