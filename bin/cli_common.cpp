@@ -204,9 +204,36 @@ std::vector<double> parse_positions(const std::string& text) {
   return p;
 }
 
+void SiteChoice::add_to(po::options_description& desc) {
+  desc.add_options()
+      ("sites", po::value(&manifest_path), "a site manifest; with --site, at that site (its road and sensors)")
+      ("site", po::value(&site_name),
+       "the manifest's site: a posterior of several sites (fit --sites) then gives that site's own traffic");
+}
+
+site::Site SiteChoice::site(const std::string& road, const po::variables_map& vm, SiteFlags& flags) const {
+  if (manifest_path.empty() != site_name.empty()) {
+    throw UsageError(site_name.empty() ? "--sites needs --site NAME: the site to use"
+                                       : "--site names a site of a manifest: give the manifest with --sites");
+  }
+  if (manifest_path.empty()) return site::Site(site::load_road(road, &std::cerr), flags.to_options());
+  for (const char* own : {"road", "sensors"}) {
+    if (vm.count(own) && !vm[own].defaulted()) {
+      throw UsageError(std::string("--") + own + " with --sites: a manifest's site brings its own road and sensors");
+    }
+  }
+  const io::SiteManifest manifest = io::read_site_manifest(manifest_path);
+  return site_of_manifest_entry(manifest, manifest.find(site_name), flags, &std::cerr);
+}
+
 void require_fitted_site(const fleet::PosteriorCloud& cloud, const std::string& posterior_path, const site::Site& site,
                          const std::string& hint) {
   if (cloud.site_fingerprint == site.fingerprint()) return;
+  if (!cloud.sites.empty()) {
+    throw UsageError("the posterior in '" + posterior_path + "' was fitted on several sites (roads '" + cloud.road_name +
+                     "'): use one with --sites MANIFEST --site NAME" +
+                     (hint.find("--new-road") != std::string::npos ? ", or another road with --new-road" : ""));
+  }
   throw UsageError("the posterior in '" + posterior_path + "' was fitted on another site (road '" + cloud.road_name +
                    "', fingerprint " + cloud.site_fingerprint + ") than road '" + site.surface().name +
                    "' with these site options (fingerprint " + site.fingerprint() + ")" + hint);

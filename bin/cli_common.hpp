@@ -72,6 +72,15 @@ std::vector<records::WimRecord> read_manifest_site_log(const io::SiteManifest& m
 // "" = none (the caller's default). UsageError naming --positions when malformed.
 std::vector<double> parse_positions(const std::string& text);
 
+// Where a posterior is applied (predict, damage, weigh): a site of a manifest (--sites M --site NAME:
+// its road and sensors from the manifest) or --road with the site flags.
+struct SiteChoice {
+  std::string manifest_path, site_name;
+  void add_to(po::options_description& desc);
+  // UsageError for --sites without --site or the other way round, or --road / --sensors beside them.
+  site::Site site(const std::string& road, const po::variables_map& vm, SiteFlags& flags) const;
+};
+
 // UsageError unless the posterior was fitted on `site` (same fingerprint); `hint` ends the message.
 void require_fitted_site(const fleet::PosteriorCloud& cloud, const std::string& posterior_path, const site::Site& site,
                          const std::string& hint);

@@ -74,6 +74,7 @@ int run_damage(int argc, const char* const argv[]) {
   bool new_road = false, quiet = false, fixed_traffic = false;
   damage::DamageOptions options;
   SiteFlags site_flags;
+  SiteChoice where;
   po::options_description desc("damage options");
   desc.add_options()
       ("help,h", "show this help")
@@ -99,6 +100,7 @@ int run_damage(int argc, const char* const argv[]) {
       ("out,o", po::value(&out)->default_value(out), "damage CSV to write ('-' = standard output)")
       ("png", po::value(&png), "also plot a4 (with its 95 % limits), a1 and the hot spots along the road here (gnuplot)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
+  where.add_to(desc);
   site_flags.add_to(desc);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, nullptr, vm,
@@ -115,13 +117,13 @@ int run_damage(int argc, const char* const argv[]) {
   options.seed = parse_seed(seed_text);
   options.traffic_bootstrap = !fixed_traffic;
   options.validate();
-  const ClassSelection selection = select_posterior_classes(source, class_label, mix_text);
+  const ClassSelection selection = select_posterior_classes(source, class_label, mix_text, where.site_name);
   const fleet::ClassPosteriors& classes = selection.classes;
   const std::vector<double>& shares = selection.shares;
   const fleet::PosteriorCloud& cloud = classes.front().cloud;
   long total_trucks = 0;
   for (const auto& c : classes) total_trucks += c.cloud.trucks_seen;
-  const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
+  const site::Site site = where.site(road, vm, site_flags);
   if (!new_road) require_fitted_site(cloud, source, site, "; pass --new-road to assess a different road on purpose");
   const auto profile = damage::predict_damage_mixture(classes, shares, site, parse_positions(positions), options);
   write_output(out, [&](std::ostream& os) { io::write_damage_csv(os, profile); });

@@ -15,28 +15,10 @@
 
 namespace ssrfleet::cli {
 
-namespace {
-// The site to predict at: a manifest's site (--sites M --site NAME), or --road with the site flags.
-site::Site predict_site(const std::string& manifest_path, const std::string& site_name, const std::string& road,
-                        const po::variables_map& vm, SiteFlags& flags) {
-  if (manifest_path.empty() != site_name.empty()) {
-    throw UsageError(site_name.empty() ? "--sites needs --site NAME: the site to predict at"
-                                       : "--site names a site of a manifest: give the manifest with --sites");
-  }
-  if (manifest_path.empty()) return site::Site(site::load_road(road, &std::cerr), flags.to_options());
-  for (const char* own : {"road", "sensors"}) {
-    if (vm.count(own) && !vm[own].defaulted()) {
-      throw UsageError(std::string("--") + own + " with --sites: a manifest's site brings its own road and sensors");
-    }
-  }
-  const io::SiteManifest manifest = io::read_site_manifest(manifest_path);
-  return site_of_manifest_entry(manifest, manifest.find(site_name), flags, &std::cerr);
-}
-}  // namespace
 
 int run_predict(int argc, const char* const argv[]) {
-  std::string posterior_path, road = "AS1", out = "-", positions, seed_text = "1", class_label, mix_text, manifest_path,
-      site_name;
+  std::string posterior_path, road = "AS1", out = "-", positions, seed_text = "1", class_label, mix_text;
+  SiteChoice where;
   bool new_road = false, quiet = false, fixed_traffic = false;
   predict::PredictionOptions options;
   SiteFlags site_flags;
@@ -46,9 +28,6 @@ int run_predict(int argc, const char* const argv[]) {
       ("posterior", po::value(&posterior_path)->required(), "posterior file from fit, or a stream's state directory")
       ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
       ("new-road", po::bool_switch(&new_road), "predict on a site other than the fitted one (paper Fig. 9)")
-      ("sites", po::value(&manifest_path), "a site manifest; with --site, predict at that site (its road and sensors)")
-      ("site", po::value(&site_name),
-       "the manifest's site to predict at: a posterior of several sites (fit --sites) draws that site's own traffic")
       ("positions", po::value(&positions), "where to predict: list 'a,b,c' or FIRST:STEP:LAST (default: the sensors)")
       ("draws", po::value(&options.theta_draws)->default_value(options.theta_draws), "posterior draws of theta")
       ("trucks-per-draw", po::value(&options.trucks_per_draw)->default_value(options.trucks_per_draw),
@@ -63,6 +42,7 @@ int run_predict(int argc, const char* const argv[]) {
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
       ("out,o", po::value(&out)->default_value(out), "prediction CSV to write ('-' = standard output)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
+  where.add_to(desc);
   site_flags.add_to(desc);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, nullptr, vm,
@@ -73,16 +53,13 @@ int run_predict(int argc, const char* const argv[]) {
   options.traffic_bootstrap = !fixed_traffic;
   // A posterior of several sites seen from the site asked for: its own traffic, class shares and
   // fingerprint.
-  const ClassSelection selection = select_posterior_classes(posterior_path, class_label, mix_text, site_name);
+  const ClassSelection selection = select_posterior_classes(posterior_path, class_label, mix_text, where.site_name);
   const fleet::ClassPosteriors& classes = selection.classes;
   const std::vector<double>& shares = selection.shares;
-  const site::Site site = predict_site(manifest_path, site_name, road, vm, site_flags);
+  const site::Site site = where.site(road, vm, site_flags);
   const fleet::PosteriorCloud& cloud = classes.front().cloud;
   if (!new_road) {
-    require_fitted_site(cloud, posterior_path, site,
-                        cloud.sites.empty() ? "; pass --new-road to predict for a different road on purpose"
-                                            : "; it was fitted on several sites: predict one with --sites MANIFEST --site "
-                                              "NAME, or another road with --new-road");
+    require_fitted_site(cloud, posterior_path, site, "; pass --new-road to predict for a different road on purpose");
   }
   const auto prediction = predict::predict_ssr_mixture(classes, shares, site, parse_positions(positions), options);
   write_output(out, [&](std::ostream& os) { predict::write_prediction_csv(os, prediction); });

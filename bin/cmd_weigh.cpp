@@ -22,6 +22,7 @@ int run_weigh(int argc, const char* const argv[]) {
   bool quiet = false;
   weigh::WeighOptions options;
   SiteFlags site_flags;
+  SiteChoice where;
   po::options_description desc("weigh options");
   desc.add_options()
       ("help,h", "show this help")
@@ -41,6 +42,7 @@ int run_weigh(int argc, const char* const argv[]) {
       ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (the same draws for every truck and step)")
       ("out,o", po::value(&out)->default_value(out), "weights CSV to write ('-' = standard output)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
+  where.add_to(desc);
   site_flags.add_to(desc);
   po::positional_options_description positional;
   positional.add("log", 1);
@@ -51,17 +53,13 @@ int run_weigh(int argc, const char* const argv[]) {
   }
   options.prediction.seed = parse_seed(seed_text);
   options.validate();
-  fleet::ClassPosteriors classes = io::read_posterior_classes(posterior_path);
-  if (fleet::unlabelled(classes) && !class_label.empty()) {
-    throw UsageError("--class: the posterior in '" + posterior_path + "' has no vehicle classes (its log had no class column)");
-  }
-  if (!class_label.empty()) classes = fleet::select_class(classes, class_label);
+  fleet::ClassPosteriors classes = select_posterior_classes(posterior_path, class_label, "", where.site_name).classes;
   if (classes.size() > 1) {
     throw UsageError("the posterior in '" + posterior_path + "' holds vehicle classes " + fleet::list_labels(classes) +
                      ": pick the trucks' class with --class");
   }
   const fleet::PosteriorCloud& cloud = classes.front().cloud;
-  const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
+  const site::Site site = where.site(road, vm, site_flags);
   require_fitted_site(cloud, posterior_path, site, "; weigh needs the road and site options the posterior was fitted with");
   const auto records = io::read_force_log_file(log_path, site.sensors(), "(--sensors " + site_flags.sensors + ")");
 

@@ -142,6 +142,30 @@ TEST_CASE("fit --sites M fits one fleet from every site, and predict --sites M -
                      s.dir)
             .status == 0);
 
+  // damage and weigh take a site of a joint posterior the same way.
+  const auto damage = run_ssrfleet("damage --posterior " + q(joint) + " --sites " + q(s.manifest) +
+                                       " --site south --draws 10 --trucks-per-draw 10 --quiet --out " +
+                                       q(s.dir.file("damage.csv")),
+                                   s.dir);
+  INFO(damage.err);
+  CHECK(damage.status == 0);
+  REQUIRE(run_ssrfleet("simulate --road AS2 --sensors 70,2,8 --trucks 3 --seed 9 --forces --quiet --out " +
+                           q(s.dir.file("forces.csv")),
+                       s.dir)
+              .status == 0);
+  const auto weighed = run_ssrfleet("weigh " + q(s.dir.file("forces.csv")) + " --posterior " + q(joint) + " --sites " +
+                                        q(s.manifest) + " --site south --draws 10 --trucks-per-draw 10 --quiet",
+                                    s.dir);
+  INFO(weighed.err);
+  CHECK(weighed.status == 0);
+  CHECK(std::count(weighed.out.begin(), weighed.out.end(), '\n') == 4);  // a header and 3 trucks
+  const auto not_one_road = run_ssrfleet("weigh " + q(s.dir.file("forces.csv")) + " --posterior " + q(joint) +
+                                             " --road AS2 --sensors 70,2,8 --quiet",
+                                         s.dir);
+  CHECK(not_one_road.status == 64);
+  CHECK(not_one_road.err.find("fitted on several sites") != std::string::npos);
+  CHECK(not_one_road.err.find("--sites MANIFEST --site NAME") != std::string::npos);
+
   // A bad record in one site's log: the file, line and field, with the site and the manifest.
   std::string b = test::read_text(s.dir.file("b.csv"));
   const std::size_t line3 = b.find('\n', b.find('\n') + 1) + 1;

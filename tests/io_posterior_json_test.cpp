@@ -193,7 +193,8 @@ TEST_CASE("a posterior of several sites lists them and reads back, and a site li
   refused([](auto& c) { c.sites[1].pool_begin = 2; }, "site.sites[1].pool");    // overlaps north's
   refused([](auto& c) { c.sites[1].pool_count = 3; }, "site.sites[1].pool");    // past the pool's end
   refused([](auto& c) { c.sites[1].pool_count = 1; }, "site.sites");            // a truck of no site
-  refused([](auto& c) { c.sites[1].trucks_seen = 4; }, "site.sites");           // 10 trucks, not 9
+  refused([](auto& c) { c.sites[1].trucks_seen = 4; }, "site.sites[1].trucks_seen");  // 10 trucks, not 9
+  refused([](auto& c) { c.sites[1].trucks_seen = 2; }, "site.sites");           // 8 trucks, not 9
   refused([](auto& c) { c.sites[1].name = "north"; }, "site.sites[1].name");    // two sites of one name
   refused([](auto& c) { c.sites[0].sensors = 0; }, "site.sites[0].sensors");
   refused([](auto& c) { c.sites.pop_back(); c.sites[0].pool_count = 5; c.sites[0].trucks_seen = 9; }, "site.sites");

@@ -26,13 +26,24 @@ MarginalSmc::MarginalSmc(std::vector<const site::Site*> sites, Options options)
       sampler_(options_.sampler),
       parallel_(options_.sampler.threads) {
   fingerprint_ = sites_fingerprint(sites_);
+  site_trucks_.assign(sites_.size(), 0);
+  recent_.assign(sites_.size(), {});
   target_.initialise(sampler_.model_rngs().child(kInitialDraws));
+}
+
+void MarginalSmc::note_site(std::uint32_t site, std::size_t truck) {
+  if (sites_.size() == 1) return;  // one site: the pool is the last trucks
+  const std::size_t per_site = std::max(kMinSitePool, kPredictionPool / sites_.size());
+  ++site_trucks_[site];
+  recent_[site].push_back(truck);
+  if (recent_[site].size() > per_site) recent_[site].pop_front();
 }
 
 smc::StageSummary MarginalSmc::absorb(const records::WimRecord& record) {
   target_.add_truck(record.speed_mps, record.sprung_mass_kg, record.impact_factor, sampler_.weights(), parallel_,
                     record.site);
   truck_ids_.push_back(record.truck_id);
+  note_site(record.site, static_cast<std::size_t>(target_.trucks() - 1));
   smc::StageSummary truck = sampler_.run_stage(
       target_, "truck '" + record.truck_id + "' (#" + std::to_string(target_.trucks()) + ")");
   target_.finish_stage();
@@ -70,24 +81,17 @@ PosteriorCloud MarginalSmc::cloud() const {
     return smc_cloud(*sites_.front(), sampler_, target_.theta(), {v.begin() + from, v.end()},
                      {m.begin() + from, m.end()}, trucks_seen());
   }
-  // Each site's most recent trucks, newest last, site by site: walk back from the newest truck.
-  const std::size_t per_site = std::max(kMinSitePool, kPredictionPool / sites_.size());
-  const auto& of = target_.truck_sites();
-  std::vector<std::vector<std::size_t>> recent(sites_.size());
-  std::vector<long> seen(sites_.size(), 0);
-  for (std::size_t i = of.size(); i-- > 0;) {
-    ++seen[of[i]];
-    if (recent[of[i]].size() < per_site) recent[of[i]].push_back(i);
-  }
+  // Each site's most recent trucks (kept as they arrive: a stream asks for the cloud at every
+  // checkpoint, so this costs O(pool), not O(n)), site by site.
   std::vector<double> speed, mass;
   std::vector<CloudSite> entries;
   for (std::size_t s = 0; s < sites_.size(); ++s) {
     const site::Site& site = *sites_[s];
     entries.push_back({"", site.fingerprint(), site.surface().name, site.sensors(), site.lateral_min_m(),
-                       site.lateral_max_m(), seen[s], speed.size(), recent[s].size()});
-    for (auto it = recent[s].rbegin(); it != recent[s].rend(); ++it) {
-      speed.push_back(v[*it]);
-      mass.push_back(m[*it]);
+                       site.lateral_max_m(), site_trucks_[s], speed.size(), recent_[s].size()});
+    for (const std::size_t i : recent_[s]) {
+      speed.push_back(v[i]);
+      mass.push_back(m[i]);
     }
   }
   PosteriorCloud c = smc_cloud(*sites_.front(), sampler_, target_.theta(), std::move(speed), std::move(mass), trucks_seen());
@@ -152,6 +156,10 @@ void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {
     target_.load_trucks(trucks, 1);
     trucks.check_seal("truck record");
   }
+  site_trucks_.assign(sites_.size(), 0);
+  recent_.assign(sites_.size(), {});
+  const auto& of = target_.truck_sites();
+  for (std::size_t i = 0; i < of.size(); ++i) note_site(of[i], i);
   sampler_.restore(state);
 }
 

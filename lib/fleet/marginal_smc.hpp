@@ -90,6 +90,11 @@ class MarginalSmc {
  private:
   std::vector<const site::Site*> sites_;
   std::string fingerprint_;  // sites_fingerprint(sites_): what the checkpoint is tied to
+  // Several sites: each site's trucks so far and its most recent ones (indices, oldest first, at
+  // most its share of kPredictionPool), kept as trucks arrive (not checkpointed: rebuilt on restore).
+  void note_site(std::uint32_t site, std::size_t truck);
+  std::vector<long> site_trucks_;
+  std::vector<std::deque<std::size_t>> recent_;
   Options options_;
   MarginalTarget target_;
   smc::TemperedSampler sampler_;
