@@ -117,13 +117,14 @@ int run_damage(int argc, const char* const argv[]) {
   options.seed = parse_seed(seed_text);
   options.traffic_bootstrap = !fixed_traffic;
   options.validate();
+  // The site first: a malformed --sites/--site is named before the posterior is read.
+  const site::Site site = where.site(road, vm, site_flags);
   const ClassSelection selection = select_posterior_classes(source, class_label, mix_text, where.site_name);
   const fleet::ClassPosteriors& classes = selection.classes;
   const std::vector<double>& shares = selection.shares;
   const fleet::PosteriorCloud& cloud = classes.front().cloud;
   long total_trucks = 0;
   for (const auto& c : classes) total_trucks += c.cloud.trucks_seen;
-  const site::Site site = where.site(road, vm, site_flags);
   if (!new_road) require_fitted_site(cloud, source, site, "; pass --new-road to assess a different road on purpose");
   const auto profile = damage::predict_damage_mixture(classes, shares, site, parse_positions(positions), options);
   write_output(out, [&](std::ostream& os) { io::write_damage_csv(os, profile); });

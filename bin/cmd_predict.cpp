@@ -51,12 +51,13 @@ int run_predict(int argc, const char* const argv[]) {
   }
   options.seed = parse_seed(seed_text);
   options.traffic_bootstrap = !fixed_traffic;
+  // The site first: a malformed --sites/--site is named before the posterior is read.
+  const site::Site site = where.site(road, vm, site_flags);
   // A posterior of several sites seen from the site asked for: its own traffic, class shares and
   // fingerprint.
   const ClassSelection selection = select_posterior_classes(posterior_path, class_label, mix_text, where.site_name);
   const fleet::ClassPosteriors& classes = selection.classes;
   const std::vector<double>& shares = selection.shares;
-  const site::Site site = where.site(road, vm, site_flags);
   const fleet::PosteriorCloud& cloud = classes.front().cloud;
   if (!new_road) {
     require_fitted_site(cloud, posterior_path, site, "; pass --new-road to predict for a different road on purpose");

@@ -53,13 +53,14 @@ int run_weigh(int argc, const char* const argv[]) {
   }
   options.prediction.seed = parse_seed(seed_text);
   options.validate();
+  // The site first: a malformed --sites/--site is named before the posterior is read.
+  const site::Site site = where.site(road, vm, site_flags);
   fleet::ClassPosteriors classes = select_posterior_classes(posterior_path, class_label, "", where.site_name).classes;
   if (classes.size() > 1) {
     throw UsageError("the posterior in '" + posterior_path + "' holds vehicle classes " + fleet::list_labels(classes) +
                      ": pick the trucks' class with --class");
   }
   const fleet::PosteriorCloud& cloud = classes.front().cloud;
-  const site::Site site = where.site(road, vm, site_flags);
   require_fitted_site(cloud, posterior_path, site, "; weigh needs the road and site options the posterior was fitted with");
   const auto records = io::read_force_log_file(log_path, site.sensors(), "(--sensors " + site_flags.sensors + ")");
 
