@@ -149,6 +149,29 @@ site::Site site_of_manifest_entry(const io::SiteManifest& manifest, const io::Ma
   throw std::logic_error("site_of_manifest_entry: unreachable");
 }
 
+std::vector<const site::Site*> ManifestSites::pointers() const {
+  std::vector<const site::Site*> p;
+  for (const auto& s : sites) p.push_back(s.get());
+  return p;
+}
+
+ManifestSites build_manifest_sites(const io::SiteManifest& manifest, const SiteFlags& flags, std::ostream* warnings) {
+  ManifestSites out;
+  for (const io::ManifestSite& entry : manifest.sites) {
+    out.flags.push_back(flags);
+    out.sites.push_back(std::make_unique<site::Site>(site_of_manifest_entry(manifest, entry, out.flags.back(), warnings)));
+  }
+  return out;
+}
+
+void refuse_beside_sites(const po::variables_map& vm, std::initializer_list<const char*> own) {
+  for (const char* key : own) {
+    if (vm.count(key) && !vm[key].defaulted()) {
+      throw UsageError(std::string("--") + key + " with --sites: a manifest's site brings its own road, sensors and log");
+    }
+  }
+}
+
 std::vector<records::WimRecord> read_manifest_site_log(const io::SiteManifest& manifest, const io::ManifestSite& entry,
                                                        const site::Site& site, const SiteFlags& flags,
                                                        const io::WimLimits& limits) {
@@ -217,11 +240,7 @@ site::Site SiteChoice::site(const std::string& road, const po::variables_map& vm
                                        : "--site names a site of a manifest: give the manifest with --sites");
   }
   if (manifest_path.empty()) return site::Site(site::load_road(road, &std::cerr), flags.to_options());
-  for (const char* own : {"road", "sensors"}) {
-    if (vm.count(own) && !vm[own].defaulted()) {
-      throw UsageError(std::string("--") + own + " with --sites: a manifest's site brings its own road and sensors");
-    }
-  }
+  refuse_beside_sites(vm, {"road", "sensors"});
   const io::SiteManifest manifest = io::read_site_manifest(manifest_path);
   return site_of_manifest_entry(manifest, manifest.find(site_name), flags, &std::cerr);
 }

@@ -3,6 +3,8 @@
 
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
+#include <memory>
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -67,6 +69,19 @@ site::Site site_of_manifest_entry(const io::SiteManifest& manifest, const io::Ma
 std::vector<records::WimRecord> read_manifest_site_log(const io::SiteManifest& manifest, const io::ManifestSite& entry,
                                                        const site::Site& site, const SiteFlags& flags,
                                                        const io::WimLimits& limits = {});
+
+// A manifest's sites, each built by site_of_manifest_entry with the flags it comes back with (its
+// sensors, for read_manifest_site_log). On the heap: fits and streams keep pointers to them.
+struct ManifestSites {
+  std::vector<std::unique_ptr<site::Site>> sites;
+  std::vector<SiteFlags> flags;
+  std::vector<const site::Site*> pointers() const;
+};
+ManifestSites build_manifest_sites(const io::SiteManifest& manifest, const SiteFlags& flags, std::ostream* warnings);
+
+// UsageError for any of `own` given on the command line beside --sites (a manifest's site brings
+// its own road, sensors, log).
+void refuse_beside_sites(const po::variables_map& vm, std::initializer_list<const char*> own);
 
 // Positions along the road: "76,77.5,80" or "FIRST:STEP:LAST" (inclusive, e.g. 76:0.05:98.5);
 // "" = none (the caller's default). UsageError naming --positions when malformed.

@@ -11,9 +11,6 @@
 #include "commands.hpp"
 #include "fit_methods.hpp"
 #include "fit_sites.hpp"
-#include "fleet/posterior_summary.hpp"
-#include "fleet/vehicle_classes.hpp"
-#include "io/posterior_json.hpp"
 #include "io/wim_log.hpp"
 #include "model/model_spec.hpp"
 #include "site/road_source.hpp"
@@ -64,11 +61,7 @@ int run_fit(int argc, const char* const argv[]) {
   std::optional<io::SiteManifest> manifest;
   const io::ManifestSite* entry = nullptr;
   if (!manifest_path.empty()) {
-    for (const char* own : {"log", "road", "sensors"}) {
-      if (vm.count(own) && !vm[own].defaulted()) {
-        throw UsageError(std::string("--") + own + " with --sites: a manifest's site brings its own log, road and sensors");
-      }
-    }
+    refuse_beside_sites(vm, {"log", "road", "sensors"});
     if (site_name.empty()) {
       fit_manifest_sites({manifest_path, out, method, seed, quiet}, fit, site_flags, limits);
       return 0;
@@ -92,23 +85,12 @@ int run_fit(int argc, const char* const argv[]) {
   }
   const auto start = std::chrono::steady_clock::now();
   std::ostream* progress = quiet ? nullptr : &std::cerr;
-  // One independent posterior per vehicle class (an unlabelled log is one class with the empty
-  // label and the seed itself), each seeded from the seed and its label (fleet/vehicle_classes.hpp).
-  fleet::ClassPosteriors classes;
-  std::vector<std::vector<fleet::ParameterSummary>> hyper, psi;
-  for (const auto& [label, class_records] : fleet::split_by_class(records)) {
-    const std::uint64_t class_seed = fleet::class_seed(seed, label);
-    if (!quiet && !label.empty()) {
-      std::cerr << "ssrfleet fit: class " << label << ": " << class_records.size() << " trucks, seed " << class_seed << "\n";
-    }
-    fleet::PosteriorCloud cloud =
-        method == "smc" ? fit_smc(site, class_records, fit, class_seed, progress, model.extension.get())
-                        : fit_mcmc(site, class_records, fit, class_seed, progress, model.extension.get());
-    hyper.push_back(fleet::summarise_cloud(cloud));
-    psi.push_back(fleet::summarise_psi(cloud));
-    classes.push_back({label, std::move(cloud)});
-  }
-  write_output(out, [&](std::ostream& os) { os << io::posterior_file_text(io::posterior_classes_to_json(classes, hyper, psi)); });
+  fit_classes_to_file(records, seed, out, quiet ? nullptr : &std::cerr,
+                      [&](const std::vector<records::WimRecord>& class_records, std::uint64_t class_seed) {
+                        return method == "smc"
+                                   ? fit_smc(site, class_records, fit, class_seed, progress, model.extension.get())
+                                   : fit_mcmc(site, class_records, fit, class_seed, progress, model.extension.get());
+                      });
   if (!quiet) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cerr << "ssrfleet fit: done in " << std::fixed << std::setprecision(1) << s << " s -> " << out << "\n";

@@ -82,29 +82,22 @@ int run_stream(int argc, const char* const argv[]) {
   if (options.fit.latent.window > 0) options.fit.core = fleet::OnlineFitOptions::Core::kLatent;
   // The core is chosen before the sampler options go to it (sampler() is the chosen core's).
   // The sites: --road and the site flags, or a manifest's (heap: the stream keeps pointers to them).
-  std::vector<std::unique_ptr<site::Site>> sites;
+  ManifestSites sites;
   std::vector<stream::WimStream::StreamSite> stream_sites;
   if (manifest_path.empty()) {
-    sites.push_back(std::make_unique<site::Site>(site::load_road(road, &std::cerr), site_flags.to_options()));
-    stream_sites.push_back({"", sites.back().get()});
+    sites.sites.push_back(std::make_unique<site::Site>(site::load_road(road, &std::cerr), site_flags.to_options()));
+    stream_sites.push_back({"", sites.sites.back().get()});
   } else {
-    for (const char* own : {"road", "sensors"}) {
-      if (vm.count(own) && !vm[own].defaulted()) {
-        throw UsageError(std::string("--") + own + " with --sites: a manifest's site brings its own road and sensors");
-      }
-    }
+    refuse_beside_sites(vm, {"road", "sensors"});
     if (options.fit.latent.window > 0 || model_text != "base") {
       throw UsageError("--sites streams the base model on the marginal core (each truck's table built through its own "
                        "site); --window and --model need the latent core, which streams one site");
     }
     const io::SiteManifest manifest = io::read_site_manifest(manifest_path);
-    for (const auto& entry : manifest.sites) {
-      SiteFlags own = site_flags;
-      sites.push_back(std::make_unique<site::Site>(site_of_manifest_entry(manifest, entry, own, &std::cerr)));
-      stream_sites.push_back({entry.name, sites.back().get()});
-    }
+    sites = build_manifest_sites(manifest, site_flags, &std::cerr);
+    for (std::size_t s = 0; s < manifest.sites.size(); ++s) stream_sites.push_back({manifest.sites[s].name, sites.sites[s].get()});
   }
-  const site::Site& site = *sites.front();
+  const site::Site& site = *sites.sites.front();
   const fleet::ModelSpec model = fleet::parse_model_spec(model_text, site);
   if (model.extension) {
     if (options.fit.latent.window > 0) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <ostream>
 #include <vector>
 
@@ -53,5 +54,12 @@ fleet::PosteriorCloud fit_smc(const std::vector<const site::Site*>& sites, const
 fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
                                const FitFlags& flags, std::uint64_t seed, std::ostream* progress,
                                const fleet::ModelExtension* extension = nullptr);
+
+// One independent posterior per vehicle class of `records` (an unlabelled log is one class with the
+// empty label and the seed itself), each fitted by fit_class(class records, fleet::class_seed(seed,
+// label)), written as one posterior file to `out` ('-' = stdout).
+void fit_classes_to_file(const std::vector<records::WimRecord>& records, std::uint64_t seed, const std::string& out,
+                         std::ostream* progress,
+                         const std::function<fleet::PosteriorCloud(const std::vector<records::WimRecord>&, std::uint64_t)>& fit_class);
 
 }  // namespace ssrfleet::cli

@@ -1,7 +1,6 @@
 #include "sites_check.hpp"
 
 #include <iomanip>
-#include <memory>
 #include <sstream>
 
 #include "discrepancy/site_conflicts.hpp"
@@ -16,14 +15,10 @@ std::string check_site_fleets(const io::SiteManifest& manifest, const SiteFlags&
   if (manifest.sites.size() < 2) {
     throw UsageError("--check compares each site with the others: the manifest '" + manifest.path + "' has one site");
   }
-  std::vector<std::unique_ptr<site::Site>> sites;
-  std::vector<const site::Site*> pointers;
+  const ManifestSites sites = build_manifest_sites(manifest, flags, progress);
   std::vector<std::vector<records::WimRecord>> logs;
-  for (const auto& entry : manifest.sites) {
-    SiteFlags own = flags;
-    sites.push_back(std::make_unique<site::Site>(site_of_manifest_entry(manifest, entry, own, progress)));
-    pointers.push_back(sites.back().get());
-    logs.push_back(read_manifest_site_log(manifest, entry, *sites.back(), own));
+  for (std::size_t s = 0; s < manifest.sites.size(); ++s) {
+    logs.push_back(read_manifest_site_log(manifest, manifest.sites[s], *sites.sites[s], sites.flags[s]));
   }
   discrepancy::SiteConflictOptions o;
   o.fit.marginal.sampler.particles = check.particles;
@@ -31,7 +26,7 @@ std::string check_site_fleets(const io::SiteManifest& manifest, const SiteFlags&
   o.fit.marginal.sampler.seed = check.seed;
   o.alpha = check.alpha;
   if (progress) o.progress = [&](const std::string& line) { *progress << "ssrfleet sites --check: " << line << "\n"; };
-  const auto conflicts = discrepancy::check_site_conflicts(pointers, logs, o);
+  const auto conflicts = discrepancy::check_site_conflicts(sites.pointers(), logs, o);
 
   std::ostringstream out;
   out << std::setprecision(6) << "site,trucks,round,distance2,p_value,flagged";

@@ -165,73 +165,6 @@ TEST_CASE("a stream of several sites resumes to the very posterior, and refuses 
   CHECK(one.err.find("one site (no manifest)") != std::string::npos);
 }
 
-TEST_CASE("a stream state of one site written before states named their sites (format 4) resumes exactly",
-          "[cli][stream][sites]") {
-  test::TempDir dir;
-  REQUIRE(run_ssrfleet("simulate --road AS1 --trucks 8 --seed 9 --quiet --out " + q(dir.file("log.csv")), dir).status == 0);
-  const std::string log = test::read_text(dir.file("log.csv"));
-  // The first 4 records (the header and comment lines, then 4 trucks).
-  std::string head;
-  {
-    std::istringstream in(log);
-    std::string line;
-    int records = 0;
-    bool header = false;
-    while (std::getline(in, line) && records < 4) {
-      head += line + "\n";
-      if (!line.empty() && line[0] != '#') (header ? ++records : (header = true, 0));
-    }
-  }
-  test::write_text(dir.file("head.csv"), head);
-  const auto stream = [&](const std::string& state, const std::string& input) {
-    return run_ssrfleet("stream --state " + q(state) + " --input " + q(input) + " --particles 64 --threads 1 --seed 2 --quiet",
-                        dir);
-  };
-  REQUIRE(stream(dir.file("straight"), dir.file("log.csv")).status == 0);
-  const std::string state = dir.file("old");
-  REQUIRE(stream(state, dir.file("head.csv")).status == 0);
-
-  // Format 4 is format 5 without the site list (a count of 1 and one empty name: 16 bytes) after
-  // the model's name, with the version changed and the whole file sealed again.
-  std::string bytes = test::read_text(state + "/checkpoint.bin");
-  std::size_t at = 8 + 4;
-  for (int text = 0; text < 2; ++text) {  // source, model
-    std::uint64_t n = 0;
-    std::memcpy(&n, bytes.data() + at, 8);
-    at += 8 + n;
-  }
-  std::uint64_t count = 0, empty_name = 1;
-  std::memcpy(&count, bytes.data() + at, 8);
-  std::memcpy(&empty_name, bytes.data() + at + 8, 8);
-  REQUIRE(count == 1);
-  REQUIRE(empty_name == 0);
-  bytes.erase(at, 16);
-  const std::uint32_t v4 = 4;
-  std::memcpy(bytes.data() + 8, &v4, 4);
-  const std::size_t body = bytes.size() - 8;
-  const std::uint64_t seal = detail::fnv1a(detail::kFnvOffset, bytes.data(), body);
-  std::memcpy(bytes.data() + body, &seal, 8);
-  test::write_text(state + "/checkpoint.bin", bytes);
-  // The history's last report names the checkpoint by its seal: name the edited one (its row set
-  // taken out with the sqlite3 shell and written again through HistoryDb, which seals the row).
-  const std::string history = state + "/history.sqlite";
-  records::HistoryReport last;
-  {
-    const io::HistoryDb db(history, "base");
-    REQUIRE(db.last_seq() == std::optional<std::uint64_t>(4));
-    last = db.read_report(4);
-  }
-  last.checkpoint_checksum = seal;
-  REQUIRE(std::system(("sqlite3 " + q(history) + " 'DELETE FROM predictions WHERE seq = 4; DELETE FROM hyperparameters "
-                       "WHERE seq = 4; DELETE FROM reports WHERE seq = 4;'").c_str()) == 0);
-  io::HistoryDb(history, "base").append(last);
-
-  const auto resumed = stream(state, dir.file("log.csv"));
-  INFO(resumed.err);
-  REQUIRE(resumed.status == 0);
-  CHECK(test::read_text(state + "/posterior.json") == test::read_text(dir.file("straight") + "/posterior.json"));
-}
-
 TEST_CASE("a stream of a one-site manifest reads the site column too, and quarantines a record of another site",
           "[cli][stream][sites]") {
   TwoSiteStream s;
@@ -264,35 +197,92 @@ void seal_again(std::string& bytes, std::size_t begin, std::size_t seal_at) {
   const std::uint64_t h = detail::fnv1a(detail::kFnvOffset, bytes.data() + begin, seal_at - begin);
   std::memcpy(bytes.data() + seal_at, &h, 8);
 }
+
+// A stream state of this build's format with 4 of a log's 8 trucks, a straight run over all 8, and
+// the edits that turn the state into one of an older format.
+struct OlderState {
+  test::TempDir dir;
+  std::string log = dir.file("log.csv"), state = dir.file("old"), straight = dir.file("straight");
+  OlderState() {
+    REQUIRE(run_ssrfleet("simulate --road AS1 --trucks 8 --seed 9 --quiet --out " + q(log), dir).status == 0);
+    std::string head;  // the comments, the header and 4 trucks
+    std::istringstream in(test::read_text(log));
+    std::string line;
+    int lines = 0;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line[0] != '#' && ++lines > 5) break;
+      head += line + "\n";
+    }
+    test::write_text(dir.file("head.csv"), head);
+    REQUIRE(stream(straight, log).status == 0);
+    REQUIRE(stream(state, dir.file("head.csv")).status == 0);
+  }
+  test::RunResult stream(const std::string& state_dir, const std::string& input) const {
+    return run_ssrfleet("stream --state " + q(state_dir) + " --input " + q(input) +
+                            " --particles 64 --threads 1 --seed 2 --quiet",
+                        dir);
+  }
+  // checkpoint.bin as stream format 4: format 5 without the site list after the model's name (a
+  // count of 1 and one empty name: 16 bytes) and with the version changed. Returns where the list
+  // was; the caller seals the file again.
+  static std::size_t drop_site_list(std::string& bytes) {
+    std::size_t at = 8 + 4;
+    for (int text = 0; text < 2; ++text) {  // source, model
+      std::uint64_t n = 0;
+      std::memcpy(&n, bytes.data() + at, 8);
+      at += 8 + n;
+    }
+    std::uint64_t count = 0, empty_name = 1;
+    std::memcpy(&count, bytes.data() + at, 8);
+    std::memcpy(&empty_name, bytes.data() + at + 8, 8);
+    REQUIRE(count == 1);
+    REQUIRE(empty_name == 0);
+    bytes.erase(at, 16);
+    const std::uint32_t v4 = 4;
+    std::memcpy(bytes.data() + 8, &v4, 4);
+    return at;
+  }
+  // Seals the edited checkpoint, writes it, and names it in the history's last report (report 4:
+  // its row set taken out with the sqlite3 shell and written again through HistoryDb, which seals
+  // the row), as the history of a state of that format would.
+  void write_checkpoint(std::string& bytes) const {
+    seal_again(bytes, 0, bytes.size() - 8);
+    test::write_text(state + "/checkpoint.bin", bytes);
+    const std::string history = state + "/history.sqlite";
+    records::HistoryReport last;
+    {
+      const io::HistoryDb db(history, "base");
+      REQUIRE(db.last_seq() == std::optional<std::uint64_t>(4));
+      last = db.read_report(4);
+    }
+    std::memcpy(&last.checkpoint_checksum, bytes.data() + bytes.size() - 8, 8);
+    REQUIRE(std::system(("sqlite3 " + q(history) + " 'DELETE FROM predictions WHERE seq = 4; DELETE FROM hyperparameters "
+                         "WHERE seq = 4; DELETE FROM reports WHERE seq = 4;'").c_str()) == 0);
+    io::HistoryDb(history, "base").append(last);
+  }
+  std::string straight_posterior() const { return test::read_text(straight + "/posterior.json"); }
+};
 }  // namespace
+
+TEST_CASE("a stream state of one site written before states named their sites (format 4) resumes exactly",
+          "[cli][stream][sites]") {
+  const OlderState c;
+  std::string bytes = test::read_text(c.state + "/checkpoint.bin");
+  OlderState::drop_site_list(bytes);
+  c.write_checkpoint(bytes);
+  const auto resumed = c.stream(c.state, c.log);
+  INFO(resumed.err);
+  REQUIRE(resumed.status == 0);
+  CHECK(test::read_text(c.state + "/posterior.json") == c.straight_posterior());
+}
 
 TEST_CASE("a stream state written before sites (stream format 4, truck records without a site) resumes exactly, "
           "its truck log written anew",
           "[cli][stream][sites]") {
-  test::TempDir dir;
-  REQUIRE(run_ssrfleet("simulate --road AS1 --trucks 8 --seed 9 --quiet --out " + q(dir.file("log.csv")), dir).status == 0);
-  std::string head;
-  {
-    std::istringstream in(test::read_text(dir.file("log.csv")));
-    std::string line;
-    int lines = 0;
-    while (std::getline(in, line)) {
-      if (!line.empty() && line[0] != '#' && ++lines > 5) break;  // the header and 4 trucks
-      head += line + "\n";
-    }
-  }
-  test::write_text(dir.file("head.csv"), head);
-  const auto stream = [&](const std::string& state, const std::string& input) {
-    return run_ssrfleet("stream --state " + q(state) + " --input " + q(input) + " --particles 64 --threads 1 --seed 2 --quiet",
-                        dir);
-  };
-  REQUIRE(stream(dir.file("straight"), dir.file("log.csv")).status == 0);
-  const std::string state = dir.file("old");
-  REQUIRE(stream(state, dir.file("head.csv")).status == 0);
-
+  const OlderState c;
   // The truck log: a sealed header (magic, generation), then per truck a sealed record that starts
   // with its id (a length and the bytes) and, from marginal target format 3 on, the site's index.
-  std::string log = test::read_text(state + "/trucks.bin");
+  std::string log = test::read_text(c.state + "/trucks.bin");
   std::size_t at = sealed_record_end(log, 0) + 8;
   int records = 0;
   while (at < log.size()) {
@@ -307,17 +297,11 @@ TEST_CASE("a stream state written before sites (stream format 4, truck records w
     ++records;
   }
   REQUIRE(records == 4);
-  test::write_text(state + "/trucks.bin", log);
+  test::write_text(c.state + "/trucks.bin", log);
 
   // The checkpoint: stream format 4 (no site list after the model), marginal target format 2.
-  std::string bytes = test::read_text(state + "/checkpoint.bin");
-  std::size_t pos = 8 + 4;
-  for (int text = 0; text < 2; ++text) {  // source, model
-    std::uint64_t n = 0;
-    std::memcpy(&n, bytes.data() + pos, 8);
-    pos += 8 + n;
-  }
-  bytes.erase(pos, 16);  // a count of 1 and one empty name
+  std::string bytes = test::read_text(c.state + "/checkpoint.bin");
+  const std::size_t pos = OlderState::drop_site_list(bytes);
   // Then seq, lines consumed, rejects' bytes, the split flag, the fixed classes (none), the classes
   // (one, unlabelled: an empty label), its trucks written and its truck log's length, 16 bytes less.
   const std::size_t log_bytes_at = pos + 8 + 8 + 8 + 1 + 8 + 8 + 8 + 8;
@@ -326,44 +310,29 @@ TEST_CASE("a stream state written before sites (stream format 4, truck records w
   REQUIRE(log_bytes == log.size() + 4 * 4);
   log_bytes = log.size();
   std::memcpy(bytes.data() + log_bytes_at, &log_bytes, 8);
-  const std::uint32_t v4 = 4, v2 = 2;
-  std::memcpy(bytes.data() + 8, &v4, 4);
+  const std::uint32_t v2 = 2;
   const std::uint64_t target_magic = 0x4e52414d46525353ULL;  // "SSRFMARN"
   const std::size_t target = bytes.find(std::string(reinterpret_cast<const char*>(&target_magic), 8));
   REQUIRE(target != std::string::npos);
   std::memcpy(bytes.data() + target + 8, &v2, 4);
-  seal_again(bytes, 0, bytes.size() - 8);
-  test::write_text(state + "/checkpoint.bin", bytes);
-  // The history's last report names the checkpoint by its seal.
-  std::uint64_t seal = 0;
-  std::memcpy(&seal, bytes.data() + bytes.size() - 8, 8);
-  const std::string history = state + "/history.sqlite";
-  records::HistoryReport last;
-  {
-    const io::HistoryDb db(history, "base");
-    last = db.read_report(4);
-  }
-  last.checkpoint_checksum = seal;
-  REQUIRE(std::system(("sqlite3 " + q(history) + " 'DELETE FROM predictions WHERE seq = 4; DELETE FROM hyperparameters "
-                       "WHERE seq = 4; DELETE FROM reports WHERE seq = 4;'").c_str()) == 0);
-  io::HistoryDb(history, "base").append(last);
+  c.write_checkpoint(bytes);
 
-  const auto resumed = stream(state, dir.file("log.csv"));
+  const auto resumed = c.stream(c.state, c.log);
   INFO(resumed.err);
   REQUIRE(resumed.status == 0);
   CHECK(resumed.err.find("4 trucks absorbed") != std::string::npos);
-  const std::string expected = test::read_text(dir.file("straight") + "/posterior.json");
-  CHECK(test::read_text(state + "/posterior.json") == expected);
+  const std::string expected = c.straight_posterior();
+  CHECK(test::read_text(c.state + "/posterior.json") == expected);
   // The log was written anew in this build's records, under a generation of its own.
-  const std::string rewritten = test::read_text(state + "/trucks.bin");
+  const std::string rewritten = test::read_text(c.state + "/trucks.bin");
   std::int32_t generation = 0;
   std::memcpy(&generation, rewritten.data() + 8, 4);
   CHECK(generation >= (1 << 24));
-  CHECK(rewritten.size() == test::read_text(dir.file("straight") + "/trucks.bin").size());
+  CHECK(rewritten.size() == test::read_text(c.straight + "/trucks.bin").size());
   // And it resumes again, as any state of this build.
-  const auto again = stream(state, dir.file("log.csv"));
+  const auto again = c.stream(c.state, c.log);
   INFO(again.err);
   REQUIRE(again.status == 0);
   CHECK(again.err.find("0 trucks absorbed, 0 rejected") != std::string::npos);
-  CHECK(test::read_text(state + "/posterior.json") == expected);
+  CHECK(test::read_text(c.state + "/posterior.json") == expected);
 }
