@@ -96,7 +96,10 @@ bool ClassCores::splits_state() const {
 }
 
 void ClassCores::write_logs() {
-  for (auto& [label, c] : cores_) {
+  for (auto& entry : cores_) {
+    // Not a structured binding: clang 14 (the fuzz build's) cannot capture one in the lambda below.
+    const std::string& label = entry.first;
+    auto& c = entry.second;
     if (!c.fit->splits_state()) continue;
     const std::string log = truck_log(label);
     const auto n = static_cast<std::uint64_t>(c.fit->trucks_seen());
