@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "fit_methods.hpp"
 #include "fit_sites.hpp"
+#include "process_ranks.hpp"
 #include "io/wim_log.hpp"
 #include "model/model_spec.hpp"
 #include "site/road_source.hpp"
@@ -54,6 +55,12 @@ int run_fit(int argc, const char* const argv[]) {
   fit.core_given = !vm["core"].defaulted();
   const std::uint64_t seed = parse_seed(seed_text);
   if (method != "smc" && method != "mcmc") throw UsageError("--method '" + method + "': must be smc or mcmc");
+  if (method == "mcmc" && !fit.checkpoint_dir.empty()) {
+    throw UsageError("--checkpoint: checkpoints are the SMC's (a batch MCMC chain is not resumed); drop --method mcmc");
+  }
+  if (method == "mcmc" && process_ranks().size() > 1) {
+    throw UsageError("--method mcmc runs on one process; only the SMC's marginal core spreads over MPI ranks");
+  }
 
   io::WimLimits limits;
   limits.fhwa_classes = fhwa;

@@ -1,6 +1,7 @@
 #include <ostream>
 
 #include "cli_common.hpp"
+#include "process_ranks.hpp"
 #include "fit_methods.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/vehicle_classes.hpp"
@@ -23,6 +24,7 @@ void fit_classes_to_file(const std::vector<records::WimRecord>& records, std::ui
     psi.push_back(fleet::summarise_psi(cloud));
     classes.push_back({label, std::move(cloud)});
   }
+  if (process_ranks().rank() != 0) return;  // rank 0 writes for every rank (the ranks hold the same posterior)
   write_output(out, [&](std::ostream& os) { os << io::posterior_file_text(io::posterior_classes_to_json(classes, hyper, psi)); });
 }
 

@@ -39,6 +39,11 @@ struct FitFlags {
   long burn_in = 5000;      // mcmc
   long thin = 10;           // mcmc
   bool verbose = false;     // one line per tempering step
+  // fit --checkpoint DIR (io/fit_checkpoint.hpp): resume from DIR's checkpoint if there is one, and
+  // write one every checkpoint_every_s seconds of fitting (or every checkpoint_every_trucks trucks).
+  std::string checkpoint_dir;
+  double checkpoint_every_s = 600.0;
+  long checkpoint_every_trucks = 0;  // 0: by time only
 
   void add_to(boost::program_options::options_description& desc);
 };

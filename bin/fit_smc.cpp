@@ -1,13 +1,18 @@
+#include <algorithm>
 #include <chrono>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
 #include <thread>
+#include <filesystem>
+#include <functional>
 
 #include "cli_common.hpp"
+#include "process_ranks.hpp"
 #include "fit_methods.hpp"
 #include "fleet/online_fit.hpp"
 #include "fleet/replay.hpp"
+#include "io/fit_checkpoint.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::cli {
@@ -35,6 +40,14 @@ void FitFlags::add_to(po::options_description& desc) {
        "latent core: MH sweeps over every older truck's latents after each new truck (0 = off)")
       ("window", po::value(&window)->default_value(window),
        "latent core: keep and move only the last W trucks' latents per particle; older ones as sufficient statistics (0 = exact)")
+      ("checkpoint", po::value(&checkpoint_dir),
+       "a directory for the fit's checkpoints (marginal core): a fit that stopped (a killed job, a lost MPI rank) "
+       "resumes from its last one with the same result, also on another number of ranks; a log grown since "
+       "goes on from it")
+      ("checkpoint-every", po::value(&checkpoint_every_s)->default_value(checkpoint_every_s, "600"),
+       "seconds of fitting between checkpoints (one is also written after the last truck)")
+      ("checkpoint-every-trucks", po::value(&checkpoint_every_trucks)->default_value(checkpoint_every_trucks),
+       "also a checkpoint every this many trucks (0: by time only)")
       ("verbose", po::bool_switch(&verbose), "print the move schedule, then every tempering step (phi, ESS, each scheduled move's runs and acceptance, jump per block)");
   po::options_description mcmc("MCMC options (--method mcmc)");
   mcmc.add_options()
@@ -61,6 +74,26 @@ fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t 
     }
     o.core = fleet::OnlineFitOptions::Core::kLatent;
     o.latent.extension = extension;
+  }
+  // Under mpirun (ssrfleet-mpi) the ranks share the marginal core's trucks; the latent core keeps
+  // every truck's latents in every particle and runs on one process.
+  const util::Ranks& ranks = process_ranks();
+  if (ranks.size() > 1 && o.core != fleet::OnlineFitOptions::Core::kMarginal) {
+    throw UsageError("the latent core (--core latent, --model with effects) runs on one process; only the marginal "
+                     "core spreads over MPI ranks: run ssrfleet fit without mpirun");
+  }
+  o.marginal.target.ranks = &ranks;
+  if (!flags.checkpoint_dir.empty()) {
+    if (o.core != fleet::OnlineFitOptions::Core::kMarginal) {
+      throw UsageError("--checkpoint: checkpoints of a fit are the marginal core's; the latent core (--core latent, "
+                       "--model with effects) fits without them");
+    }
+    if (!(flags.checkpoint_every_s > 0.0)) throw UsageError("--checkpoint-every must be > 0 seconds");
+    if (flags.checkpoint_every_trucks < 0) throw UsageError("--checkpoint-every-trucks must be >= 0");
+    std::error_code ec;
+    if (!std::filesystem::is_directory(flags.checkpoint_dir, ec)) {
+      throw MissingInputError("--checkpoint '" + flags.checkpoint_dir + "' is not a directory (create it first)");
+    }
   }
   if (flags.window < 0) throw UsageError("--window must be >= 0");
   if (flags.window > 0 && o.core == fleet::OnlineFitOptions::Core::kMarginal) {
@@ -89,12 +122,33 @@ fleet::PosteriorCloud fit_smc_on(const std::vector<const site::Site*>& sites,
   const int final_sweeps = flags.final_sweeps_given ? flags.final_sweeps : o.default_final_sweeps();
   auto smc = fleet::make_online_fit(sites, o);
   const std::size_t n = records.size();
+  const util::Ranks& ranks = process_ranks();
+  const std::string checkpoint =
+      flags.checkpoint_dir.empty() ? std::string() : io::fit_checkpoint_path(flags.checkpoint_dir, seed);
+  if (!checkpoint.empty()) {
+    if (const std::size_t resumed = io::read_fit_checkpoint(checkpoint, *smc, records); resumed > 0 && progress) {
+      *progress << "fit: resumed from " << checkpoint << " at truck " << resumed << "/" << n << "\n";
+    }
+  }
+  // When the next checkpoint is due: rank 0's clock decides for every rank (they must write together).
+  auto last_checkpoint = std::chrono::steady_clock::now();
+  auto checkpoint_due = [&](std::size_t t) {
+    char due = 0;
+    if (ranks.rank() == 0) {
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint).count();
+      due = t + 1 == n || s >= flags.checkpoint_every_s ||
+            (flags.checkpoint_every_trucks > 0 && (t + 1) % static_cast<std::size_t>(flags.checkpoint_every_trucks) == 0);
+    }
+    ranks.broadcast(&due, 1, 0);
+    return due != 0;
+  };
   if (progress && flags.verbose)
     *progress << "fit: move schedule (" << smc->core() << " core)\n" << smc->sampler().options().schedule.describe();
   fleet::ReplayOptions replay;
   replay.final_sweeps = final_sweeps;
+  std::function<void(std::size_t, const smc::StageSummary&, const fleet::OnlineFit&)> report;
   if (progress) {
-    replay.after_record = [&](std::size_t t, const smc::StageSummary& stage, const fleet::OnlineFit& fit) {
+    report = [&](std::size_t t, const smc::StageSummary& stage, const fleet::OnlineFit& fit) {
       double acc = 0.0;
       int blocks = 0, moves = 0;
       for (const auto& step : stage.steps) {
@@ -116,9 +170,38 @@ fleet::PosteriorCloud fit_smc_on(const std::vector<const site::Site*>& sites,
       *progress << "fit: " << sweeps << " final sweeps at phi = 1 (" << smc->core() << " core) ..." << std::flush;
     };
   }
+  // Truck stages that ran no move: the part of a truck's cost that more ranks do not shrink (its
+  // own ℓ for every particle, on its rank; the reweighting), for the summary line below.
+  long plain_stages = 0;
+  double plain_stage_s = 0.0;
+  replay.after_record = [&](std::size_t t, const smc::StageSummary& stage, const fleet::OnlineFit& fit) {
+    if (report) report(t, stage, fit);
+    if (std::none_of(stage.steps.begin(), stage.steps.end(), [](const auto& step) { return step.mh.sweeps > 0; })) {
+      ++plain_stages;
+      plain_stage_s += stage.wall_time_s;
+    }
+    if (!checkpoint.empty() && checkpoint_due(t)) {
+      io::write_fit_checkpoint(checkpoint, fit, ranks);
+      last_checkpoint = std::chrono::steady_clock::now();
+    }
+  };
   const fleet::ReplaySummary done = fleet::replay(*smc, records, replay);
   if (progress && done.final_sweeps > 0) {
     *progress << " done, " << std::fixed << std::setprecision(3) << done.final_s << " s\n";
+    progress->unsetf(std::ios::floatfield);
+  }
+  // Where the time went, and what the ranks exchanged (README "Scale-out on MPI" takes its
+  // figures from this line).
+  if (const fleet::MarginalSmc* m = smc->marginal(); progress && m != nullptr) {
+    const double tables = m->target().table_seconds(), total = done.replay_s + done.final_s;
+    const util::Ranks::Traffic sent = ranks.traffic();
+    *progress << std::fixed << std::setprecision(2) << "fit: " << ranks.size() << " rank(s) x " << o.sampler().threads
+              << " thread(s): " << total << " s, of which tables " << tables << " s (rank 0's trucks), stages and moves "
+              << total - tables << " s; " << m->sampler().state().moves_run << " move phases; " << plain_stages
+              << " truck stages without moves, " << std::setprecision(3)
+              << (plain_stages > 0 ? 1e3 * plain_stage_s / static_cast<double>(plain_stages) : 0.0) << " ms each";
+    if (ranks.size() > 1) *progress << "; rank 0 sent " << sent.bytes << " bytes in " << sent.calls << " collectives";
+    *progress << "\n";
     progress->unsetf(std::ios::floatfield);
   }
   // Printed even with --quiet: it is about the answer, not the progress.

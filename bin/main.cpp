@@ -1,14 +1,16 @@
 // ssrfleet: parse the subcommand name, hand the rest to that subcommand, and turn exceptions
 // into one clear message and a sysexits-style status: 64 usage, 65 data, 66 no input,
-// 70 internal, 74 I/O.
+// 70 internal, 74 I/O. Under mpirun (ssrfleet-mpi, README "Scale-out on MPI") rank 0 speaks for all.
 #include <cstring>
 #include <functional>
 #include <iostream>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
 #include "commands.hpp"
+#include "process_ranks.hpp"
 #include "util/errors.hpp"
 
 namespace {
@@ -41,57 +43,95 @@ void print_usage(std::ostream& os) {
   for (const auto& [name, cmd] : commands()) os << "  " << name << std::string(12 - name.size(), ' ') << cmd.summary << "\n";
 }
 
-}  // namespace
+// The command's status. every_rank_alike: the error (if any) is one that every MPI rank meets at
+// the same point, reading the same inputs (so rank 0 alone reports it and the ranks end together);
+// any other error may be this rank's alone and ends them all (abort_process_ranks).
+struct Outcome {
+  int status = 0;
+  bool every_rank_alike = true;
+};
 
-int main(int argc, char* argv[]) {
+Outcome run_command(int argc, char* argv[]) {
   if (argc < 2) {
     print_usage(std::cerr);
-    return 64;
+    return {64, true};
   }
   const std::string name = argv[1];
   if (name == "--help" || name == "-h" || name == "help") {
     print_usage(std::cout);
-    return 0;
+    return {0, true};
   }
   if (name == "--version") {
     std::cout << "ssrfleet " << SSRFLEET_VERSION << "\n";
-    return 0;
+    return {0, true};
   }
   const auto it = commands().find(name);
   if (it == commands().end()) {
     std::cerr << "ssrfleet: unknown command '" << name << "'\n\n";
     print_usage(std::cerr);
-    return 64;
+    return {64, true};
   }
-  const std::string prefix = "ssrfleet " + name + ": ";
+  // Rank 0 speaks for every rank; another rank's message (an error of its own) names it.
+  const std::string prefix =
+      "ssrfleet " + name + (ssrfleet::cli::process_ranks().rank() == 0 ? "" : ssrfleet::cli::rank_label()) + ": ";
   try {
-    return it->second.run(argc - 1, argv + 1);
+    // Several ranks share one fit's work; the other commands run on one process.
+    if (ssrfleet::cli::process_ranks().size() > 1 && name != "fit") {
+      throw ssrfleet::UsageError("runs on one process: of the commands, only fit spreads over MPI ranks "
+                                 "(mpirun -np R ssrfleet-mpi fit ...); run ssrfleet " + name + " without mpirun");
+    }
+    return {it->second.run(argc - 1, argv + 1), true};
   } catch (const ssrfleet::UsageError& e) {
     std::cerr << prefix << e.what() << "\n";
-    return 64;
+    return {64, true};
   } catch (const ssrfleet::DataError& e) {
     std::cerr << prefix << e.what() << "\n";
-    return 65;
+    return {65, true};
   } catch (const ssrfleet::MissingInputError& e) {
     std::cerr << prefix << e.what() << "\n";
-    return 66;
+    return {66, true};
   } catch (const ssrfleet::BusyError& e) {
     std::cerr << prefix << e.what() << "\n";
-    return 75;
+    return {75, false};
   } catch (const ssrfleet::IoError& e) {
     std::cerr << prefix << e.what() << "\n";
-    return 74;
+    return {74, false};
   } catch (const ssrfleet::NumericalError& e) {
     std::cerr << prefix << "numerical failure: " << e.what() << "\n";
-    return 70;
+    return {70, false};
   } catch (const std::invalid_argument& e) {
     std::cerr << prefix << e.what() << "\n";
-    return 64;
+    return {64, true};
   } catch (const std::out_of_range& e) {
     std::cerr << prefix << e.what() << "\n";
-    return 64;
+    return {64, true};
   } catch (const std::exception& e) {
     std::cerr << prefix << "internal error: " << e.what() << "\n";
-    return 70;
+    return {70, false};
   }
+}
+
+}  // namespace
+
+int main(int argc, char* argv[]) {
+  ssrfleet::cli::start_process_ranks(&argc, &argv);
+  // Rank 0 speaks for every rank: the others' standard output and error go nowhere, except for an
+  // error of their own (below, which must be seen: it ends the run).
+  std::ostringstream quiet_out, quiet_err;
+  std::streambuf* const err = std::cerr.rdbuf();
+  std::streambuf* const out = std::cout.rdbuf();
+  const bool speaks = ssrfleet::cli::process_ranks().rank() == 0;
+  if (!speaks) {
+    std::cout.rdbuf(quiet_out.rdbuf());
+    std::cerr.rdbuf(quiet_err.rdbuf());
+  }
+  const Outcome outcome = run_command(argc, argv);
+  std::cout.rdbuf(out);
+  std::cerr.rdbuf(err);
+  if (outcome.status != 0 && !outcome.every_rank_alike) {
+    if (!speaks) std::cerr << quiet_err.str();
+    ssrfleet::cli::abort_process_ranks(outcome.status);
+  }
+  ssrfleet::cli::stop_process_ranks();
+  return outcome.status;
 }

@@ -5,6 +5,7 @@
 #include "fleet/smc_cloud.hpp"
 
 #include <algorithm>
+#include <sstream>
 #include <tuple>
 
 #include "util/errors.hpp"
@@ -126,11 +127,39 @@ void MarginalSmc::save_state(BinaryWriter& out) const {
 }
 
 void MarginalSmc::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const {
-  for (std::size_t i = begin; i < end; ++i) {
-    out.text(truck_ids_[i]);
-    target_.save_trucks(out, i, i + 1);
-    out.seal();  // each record checked on its own: the truck log is appended to
+  const util::Ranks& ranks = target_.ranks();
+  auto record = [&](BinaryWriter& w, std::size_t i) {
+    w.text(truck_ids_[i]);
+    target_.save_trucks(w, i, i + 1);
+    w.seal();  // each record checked on its own: the truck log is appended to
+  };
+  if (ranks.size() == 1) {
+    for (std::size_t i = begin; i < end; ++i) record(out, i);
+    return;
   }
+  // Several ranks: a truck's table is on its own rank, which writes its record (sealed on its own,
+  // so the bytes are those one process writes) and sends it to rank 0, which writes them all in
+  // truck order. Collective; what `out` receives on the other ranks is nothing.
+  std::ostringstream mine;
+  BinaryWriter blob(mine);
+  for (std::size_t i = begin; i < end; ++i) {
+    if (!ranks.owns(i)) continue;
+    std::ostringstream one;
+    BinaryWriter w(one);
+    record(w, i);
+    blob.text(one.str());
+  }
+  const std::vector<std::string> all = ranks.gather(mine.str(), 0);
+  if (ranks.rank() != 0) return;
+  std::vector<std::istringstream> from;
+  std::vector<BinaryReader> readers;
+  from.reserve(all.size());
+  readers.reserve(all.size());
+  for (const std::string& s : all) {
+    from.emplace_back(s);
+    readers.emplace_back(from.back(), "a rank's truck records");
+  }
+  for (std::size_t i = begin; i < end; ++i) out.sealed_bytes(readers[static_cast<std::size_t>(ranks.owner(i))].text("truck record", std::size_t{1} << 30));
 }
 
 void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {

@@ -1,6 +1,7 @@
 #include "fleet/marginal_target.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -11,6 +12,19 @@
 namespace ssrfleet::fleet {
 
 namespace {
+
+// Adds the wall time of its scope to a counter (MarginalTarget::table_seconds).
+class ScopeTimer {
+ public:
+  explicit ScopeTimer(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
+  ~ScopeTimer() { total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  ScopeTimer(const ScopeTimer&) = delete;
+  ScopeTimer& operator=(const ScopeTimer&) = delete;
+
+ private:
+  double& total_;
+  std::chrono::steady_clock::time_point start_;
+};
 
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 
@@ -48,7 +62,10 @@ double weighted_quantile(const Eigen::Ref<const Eigen::RowVectorXd>& x, const Ei
 }  // namespace
 
 MarginalTarget::MarginalTarget(std::vector<const site::Site*> sites, Options options)
-    : sites_(std::move(sites)), options_(std::move(options)), marginal_(model::FleetMarginal(0, {}, {})) {
+    : sites_(std::move(sites)),
+      options_(std::move(options)),
+      ranks_(options_.ranks != nullptr ? options_.ranks : &util::single_rank()),
+      marginal_(model::FleetMarginal(0, {}, {})) {
   if (sites_.empty() || std::find(sites_.begin(), sites_.end(), nullptr) != sites_.end()) {
     throw UsageError("MarginalTarget: needs at least one site");
   }
@@ -114,17 +131,18 @@ HyperVector MarginalTarget::theta_of(Eigen::Index p) const {
 }
 
 double MarginalTarget::sum_loglik(const model::TableStore& store, const model::FleetMarginal& marginal,
-                                  std::size_t end, const HyperVector& theta) const {
+                                  const HyperVector& theta) const {
   const model::ThetaTerms terms = marginal.prepare(theta);
-  double s = kNegInf;
-  marginal.sum_log_likelihood(store, end, &terms, 1, &s);
-  return s;
+  util::ExactSum s;
+  marginal.add_log_likelihoods(store, store.trucks(), &terms, 1, &s);
+  ranks_->sum(&s, 1);
+  return s.value();
 }
 
 double MarginalTarget::log_posterior(const HyperVector& theta) const {
   const double lp = options_.prior.log_prior(theta);
   if (lp == kNegInf) return lp;
-  return lp + sum_loglik(store_, marginal_, store_.trucks(), theta);
+  return lp + sum_loglik(store_, marginal_, theta);
 }
 
 MarginalTarget::TableSettings MarginalTarget::ideal_settings(const Eigen::ArrayXd& W) const {
@@ -222,20 +240,25 @@ std::size_t MarginalTarget::prebuild(const std::vector<UpcomingTruck>& upcoming,
   const model::TruckTableOptions o = frozen_table_options(W);
   const auto count = static_cast<std::size_t>(std::min<std::int64_t>(frozen_until_ - n, static_cast<std::int64_t>(upcoming.size())));
   // Already built for these options: nothing to do (the cache holds the span from its start).
-  if (!prebuilt_.empty() && prebuilt_.front().truck <= n && prebuilt_.back().truck >= n + static_cast<std::int64_t>(count) - 1)
-    return 0;
+  if (!prebuilt_.empty() && prebuilt_from_ <= n && prebuilt_until_ >= n + static_cast<std::int64_t>(count)) return 0;
   for (const auto& u : upcoming) {
     if (u.site >= sites_.size() || u.impact_factors == nullptr || u.impact_factors->size() != site_of(u.site).sensors()) {
       throw UsageError("MarginalTarget::prebuild: an upcoming truck has no impact factors for its site");
     }
   }
-  std::vector<Prebuilt> built(count);
+  // This rank's trucks of the span; the others' ranks build theirs at the same time.
+  std::vector<std::size_t> mine;
+  for (std::size_t i = 0; i < count; ++i)
+    if (ranks_->owns(static_cast<std::uint64_t>(n) + i)) mine.push_back(i);
+  std::vector<Prebuilt> built(mine.size());
+  const ScopeTimer timer(table_seconds_);
   // One truck per thread; each table is built serially, so its bits are those of add_truck's.
-  parallel(static_cast<Eigen::Index>(count), [&](Eigen::Index begin, Eigen::Index end) {
-    for (Eigen::Index i = begin; i < end; ++i) {
-      const UpcomingTruck& u = upcoming[static_cast<std::size_t>(i)];
-      Prebuilt& b = built[static_cast<std::size_t>(i)];
-      b.truck = n + i;
+  parallel(static_cast<Eigen::Index>(mine.size()), [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index k = begin; k < end; ++k) {
+      const std::size_t i = mine[static_cast<std::size_t>(k)];
+      const UpcomingTruck& u = upcoming[i];
+      Prebuilt& b = built[static_cast<std::size_t>(k)];
+      b.truck = n + static_cast<std::int64_t>(i);
       b.freeze_id = freeze_id_;
       b.site = u.site;
       b.fit = model::fit_truck(site_of(u.site), u.speed_mps, u.sprung_mass_kg, *u.impact_factors, o);
@@ -244,7 +267,9 @@ std::size_t MarginalTarget::prebuild(const std::vector<UpcomingTruck>& upcoming,
     }
   });
   prebuilt_ = std::move(built);
-  return count;
+  prebuilt_from_ = n;
+  prebuilt_until_ = n + static_cast<std::int64_t>(count);
+  return mine.size();
 }
 
 void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Eigen::VectorXd& impact_factors,
@@ -253,11 +278,15 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
   check_truck(site_index, impact_factors);
   const site::Site& site = site_of(site_index);
   const util::ParallelRange range = [&parallel](Eigen::Index n, const util::RangeBody& body) { parallel(n, body); };
+  const std::int64_t n = trucks();
+  const bool mine = ranks_->owns(static_cast<std::uint64_t>(n));
   model::TruckFit fit;
   model::TruckTable table;
-  if (trucks() == 0) {
+  std::optional<ScopeTimer> timer(std::in_place, table_seconds_);
+  if (n == 0) {
     // The first truck sets the lattice's origin and first spacing, and σ_ref (its own noise
     // estimate, inside the prior box); the rebuild rule corrects both as the posterior forms.
+    // Every rank builds it: the settings it sets are everyone's.
     model::TruckTableOptions o = table_options(settings_);
     o.population.reset();
     o.max_piece_sd_m = max_piece_sd(W);
@@ -274,26 +303,40 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
     table = model::build_truck_table(site, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
   } else {
     const model::TruckTableOptions& o = frozen_table_options(W);
-    const std::int64_t n = trucks();
-    const auto it = std::find_if(prebuilt_.begin(), prebuilt_.end(),
-                                 [&](const Prebuilt& b) {
-                                   return b.truck == n && b.freeze_id == freeze_id_ && b.site == site_index;
-                                 });
-    if (it != prebuilt_.end()) {
-      fit = it->fit;
-      table = std::move(it->table);
-      ++prebuilt_used_;
-    } else {
-      fit = model::fit_truck(site, speed_mps, sprung_mass_kg, impact_factors, o);
-      table = model::build_truck_table(site, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
+    if (mine) {
+      const auto it = std::find_if(prebuilt_.begin(), prebuilt_.end(), [&](const Prebuilt& b) {
+        return b.truck == n && b.freeze_id == freeze_id_ && b.site == site_index;
+      });
+      if (it != prebuilt_.end()) {
+        fit = it->fit;
+        table = std::move(it->table);
+        ++prebuilt_used_;
+      } else {
+        fit = model::fit_truck(site, speed_mps, sprung_mass_kg, impact_factors, o);
+        table = model::build_truck_table(site, speed_mps, sprung_mass_kg, impact_factors, settings_.lattice, o, fit, range);
+      }
     }
+    timer.reset();  // the wait for the fit's rank below is not this rank's table work
+    // Every rank keeps every truck's fit (the lattice follows their widths: ideal_settings) and its
+    // table's lateral check (so the warning it feeds is the same on every rank).
+    struct FromOwner {
+      model::TruckFit fit;
+      double lateral_error_nats;
+    } shared{fit, table.lateral_error_nats};
+    static_assert(std::is_trivially_copyable_v<FromOwner> && sizeof(FromOwner) == sizeof(model::TruckFit) + sizeof(double));
+    ranks_->broadcast(&shared, sizeof shared, ranks_->owner(static_cast<std::uint64_t>(n)));
+    fit = shared.fit;
+    table.lateral_error_nats = shared.lateral_error_nats;
   }
-  passes_ += table.passes;
   if (std::isfinite(table.lateral_error_nats)) {
     ++lateral_checked_;
     lateral_error_abs_sum_ += std::abs(table.lateral_error_nats);
   }
-  store_.append(table, site_index);
+  if (mine) {
+    passes_ += table.passes;
+    store_.append(table, site_index);
+  }
+  truck_site_.push_back(site_index);
   speed_mps_.push_back(speed_mps);
   sprung_mass_kg_.push_back(sprung_mass_kg);
   observed_if_.push_back(impact_factors);
@@ -336,21 +379,27 @@ void MarginalTarget::begin_rebuild(const Eigen::ArrayXd& W, const smc::ParallelF
   model::TruckTableOptions o = table_options(ideal);
   o.max_piece_sd_m = max_piece_sd(W);
   const Eigen::Index n = trucks();
-  std::vector<model::TruckTable> tables(static_cast<std::size_t>(n));
-  parallel(n, [&](Eigen::Index begin, Eigen::Index end) {
-    for (Eigen::Index i = begin; i < end; ++i) {
-      const auto u = static_cast<std::size_t>(i);
-      tables[u] = model::build_truck_table(site_of(truck_sites()[u]), speed_mps_[u], sprung_mass_kg_[u],
-                                           observed_if_[u], ideal.lattice, o, fits_[u]);
+  // This rank's trucks: the k-th of its store is truck rank + k × size.
+  const auto local = static_cast<Eigen::Index>(store_.trucks());
+  const auto global = [&](Eigen::Index k) {
+    return static_cast<std::size_t>(ranks_->rank()) + static_cast<std::size_t>(k) * static_cast<std::size_t>(ranks_->size());
+  };
+  std::vector<model::TruckTable> tables(static_cast<std::size_t>(local));
+  const ScopeTimer timer(table_seconds_);
+  parallel(local, [&](Eigen::Index begin, Eigen::Index end) {
+    for (Eigen::Index k = begin; k < end; ++k) {
+      const std::size_t u = global(k);
+      tables[static_cast<std::size_t>(k)] = model::build_truck_table(site_of(truck_site_[u]), speed_mps_[u], sprung_mass_kg_[u],
+                                                                     observed_if_[u], ideal.lattice, o, fits_[u]);
     }
   });
   model::TableStore fresh;
   std::size_t nodes = 0;
   for (const auto& t : tables) nodes += t.nodes();
   fresh.reserve(tables.size(), nodes);
-  for (std::size_t u = 0; u < tables.size(); ++u) {
-    const model::TruckTable& t = tables[u];
-    fresh.append(t, truck_sites()[u]);
+  for (Eigen::Index k = 0; k < local; ++k) {
+    const model::TruckTable& t = tables[static_cast<std::size_t>(k)];
+    fresh.append(t, truck_site_[global(k)]);
     passes_ += t.passes - t.fit.passes;
   }
   old_store_ = std::move(store_);
@@ -377,26 +426,41 @@ void MarginalTarget::finish_stage() {
 
 void MarginalTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
                                  const smc::ParallelFor& parallel) {
-  const std::size_t n = store_.trucks();
-  parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
+  const Eigen::Index P = options_.particles;
+  const std::size_t n = speed_mps_.size();
+  // The newest truck's rank computes its ℓ for every particle (truck stage); every rank sums its
+  // own trucks (correction); then the ranks exchange (outside the threads).
+  const int newest = n > 0 ? ranks_->owner(n - 1) : 0;
+  std::vector<util::ExactSum> sums(mode_ == Mode::kCorrection ? static_cast<std::size_t>(P) : 0);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index p = begin; p < end; ++p) {
       const HyperVector th = theta_of(p);
-      const double lp = options_.prior.log_prior(th) + log_jacobian(th);
       switch (mode_) {
         case Mode::kIdle:
           inc_[p] = 0.0;
           break;
         case Mode::kTruck:
-          inc_[p] = marginal_.log_likelihood(store_.view(n - 1), marginal_.prepare(th));
+          inc_[p] = newest == ranks_->rank() ? marginal_.log_likelihood(store_.view(store_.trucks() - 1), marginal_.prepare(th))
+                                             : 0.0;
           break;
-        case Mode::kCorrection:
-          inc_[p] = sum_loglik(store_, marginal_, n, th) - base_sum_[p];
+        case Mode::kCorrection: {
+          const model::ThetaTerms terms = marginal_.prepare(th);
+          marginal_.add_log_likelihoods(store_, store_.trucks(), &terms, 1, &sums[static_cast<std::size_t>(p)]);
           break;
+        }
       }
-      log_base[p] = lp + base_sum_[p];
-      loglik[p] = inc_[p];
     }
   });
+  if (mode_ == Mode::kTruck) ranks_->broadcast(inc_.data(), static_cast<std::size_t>(P) * sizeof(double), newest);
+  if (mode_ == Mode::kCorrection) {
+    ranks_->sum(sums.data(), sums.size());
+    for (Eigen::Index p = 0; p < P; ++p) inc_[p] = sums[static_cast<std::size_t>(p)].value() - base_sum_[p];
+  }
+  for (Eigen::Index p = 0; p < P; ++p) {
+    const HyperVector th = theta_of(p);
+    log_base[p] = options_.prior.log_prior(th) + log_jacobian(th) + base_sum_[p];
+    loglik[p] = inc_[p];
+  }
 }
 
 void MarginalTarget::get_block(int /*block*/, Eigen::Ref<Eigen::MatrixXd> values) const {
@@ -411,56 +475,68 @@ void MarginalTarget::get_block(int /*block*/, Eigen::Ref<Eigen::MatrixXd> values
 void MarginalTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen::MatrixXd>& proposed,
                                     Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
                                     const smc::ParallelFor& parallel) {
-  const std::size_t n = store_.trucks();
-  parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
+  const Eigen::Index P = options_.particles;
+  const auto count = static_cast<std::size_t>(P);
+  const std::size_t n = speed_mps_.size();
+  const std::size_t local = store_.trucks();
+  const bool newest_mine = n > 0 && ranks_->owns(n - 1);
+  const int newest = n > 0 ? ranks_->owner(n - 1) : 0;
+  // Per particle: the log prior (with the Jacobian), the exact sum over this rank's trucks in log γ
+  // (the old tables' in a correction), the new tables' sum (correction) and the newest truck's ℓ
+  // (truck stage, on its rank). Sums over the ranks follow, outside the threads.
+  std::vector<double> lp(count), inc(count, 0.0);
+  std::vector<util::ExactSum> sums(mode_ == Mode::kCorrection ? 2 * count : count);
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
     // The chunk's particles together: the sums over the stored trucks visit the store in
-    // cache-sized blocks for all of them (FleetMarginal::sum_log_likelihood), with the same bits
-    // as a sum per particle.
-    const auto count = static_cast<std::size_t>(end - begin);
-    std::vector<double> lp(count);
-    std::vector<model::ThetaTerms> terms(count), old_terms;
-    std::vector<double> base(count, kNegInf), sums(count);
-    for (std::size_t c = 0; c < count; ++c) {
+    // cache-sized blocks for all of them (FleetMarginal::add_log_likelihoods).
+    const auto chunk = static_cast<std::size_t>(end - begin);
+    const auto first = static_cast<std::size_t>(begin);
+    std::vector<model::ThetaTerms> terms(chunk), old_terms;
+    for (std::size_t c = 0; c < chunk; ++c) {
       const HyperVector th = from_move_coordinates(proposed, begin + static_cast<Eigen::Index>(c));
-      lp[c] = options_.prior.log_prior(th);
-      if (lp[c] > kNegInf) {
-        lp[c] += log_jacobian(th);
+      lp[first + c] = options_.prior.log_prior(th);
+      if (lp[first + c] > kNegInf) {
+        lp[first + c] += log_jacobian(th);
         terms[c] = marginal_.prepare(th);  // default terms are outside the support: sum -inf
       }
     }
-    std::vector<double> inc(count, 0.0);
+    util::ExactSum* base = sums.data() + first;
     switch (mode_) {
       case Mode::kIdle:
-        marginal_.sum_log_likelihood(store_, n, terms.data(), count, base.data());
+        marginal_.add_log_likelihoods(store_, local, terms.data(), chunk, base);
         break;
       case Mode::kTruck:
-        marginal_.sum_log_likelihood(store_, n - 1, terms.data(), count, base.data());
-        for (std::size_t c = 0; c < count; ++c)
-          if (lp[c] > kNegInf) inc[c] = marginal_.log_likelihood(store_.view(n - 1), terms[c]);
+        marginal_.add_log_likelihoods(store_, newest_mine ? local - 1 : local, terms.data(), chunk, base);
+        if (newest_mine)
+          for (std::size_t c = 0; c < chunk; ++c)
+            if (lp[first + c] > kNegInf) inc[first + c] = marginal_.log_likelihood(store_.view(local - 1), terms[c]);
         break;
       case Mode::kCorrection:
-        old_terms.resize(count);
-        for (std::size_t c = 0; c < count; ++c)
-          if (lp[c] > kNegInf)
+        old_terms.resize(chunk);
+        for (std::size_t c = 0; c < chunk; ++c)
+          if (lp[first + c] > kNegInf)
             old_terms[c] = old_marginal_->prepare(from_move_coordinates(proposed, begin + static_cast<Eigen::Index>(c)));
-        old_marginal_->sum_log_likelihood(*old_store_, n, old_terms.data(), count, base.data());
-        marginal_.sum_log_likelihood(store_, n, terms.data(), count, sums.data());
-        for (std::size_t c = 0; c < count; ++c) inc[c] = sums[c] - base[c];
+        old_marginal_->add_log_likelihoods(*old_store_, old_store_->trucks(), old_terms.data(), chunk, base);
+        marginal_.add_log_likelihoods(store_, local, terms.data(), chunk, sums.data() + count + first);
         break;
     }
-    for (std::size_t c = 0; c < count; ++c) {
-      const Eigen::Index p = begin + static_cast<Eigen::Index>(c);
-      double b = lp[c] > kNegInf ? base[c] : kNegInf, i = lp[c] > kNegInf ? inc[c] : 0.0;
-      if (!(b > kNegInf) || std::isnan(i)) {
-        b = kNegInf;
-        i = 0.0;
-      }
-      proposed_base_sum_[p] = b;
-      proposed_inc_[p] = i;
-      log_base[p] = b == kNegInf ? kNegInf : lp[c] + b;
-      loglik[p] = i;
-    }
   });
+  ranks_->sum(sums.data(), sums.size());
+  if (mode_ == Mode::kTruck) ranks_->broadcast(inc.data(), count * sizeof(double), newest);
+  for (std::size_t c = 0; c < count; ++c) {
+    const double base = sums[c].value();
+    if (mode_ == Mode::kCorrection) inc[c] = sums[count + c].value() - base;
+    const auto p = static_cast<Eigen::Index>(c);
+    double b = lp[c] > kNegInf ? base : kNegInf, i = lp[c] > kNegInf ? inc[c] : 0.0;
+    if (!(b > kNegInf) || std::isnan(i)) {
+      b = kNegInf;
+      i = 0.0;
+    }
+    proposed_base_sum_[p] = b;
+    proposed_inc_[p] = i;
+    log_base[p] = b == kNegInf ? kNegInf : lp[c] + b;
+    loglik[p] = i;
+  }
 }
 
 void MarginalTarget::accept(int /*block*/, const std::vector<char>& accepted,

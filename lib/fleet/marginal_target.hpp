@@ -37,6 +37,8 @@
 #include "model/truck_table.hpp"
 #include "site/site.hpp"
 #include "smc/target.hpp"
+#include "util/exact_sum.hpp"
+#include "util/ranks.hpp"
 
 namespace ssrfleet::fleet {
 
@@ -100,6 +102,11 @@ class MarginalTarget final : public smc::TemperedModel {
     // cloud by at most 1/freeze_divisor of the trucks, well inside population_widening.
     int freeze_divisor = 32;
     int freeze_max = 64;
+    // The processes the fit runs on (util/ranks.hpp; null: this one alone). Every rank holds the
+    // same particles; truck i's table is built and kept by rank i % R alone, which sums its own
+    // trucks' ℓ_i for every particle, and the exact partial sums are added over the ranks, so a
+    // seed gives the same bits for any R. The ranks must call every member in the same order.
+    const util::Ranks* ranks = nullptr;
   };
 
   struct TableSettings {
@@ -148,10 +155,12 @@ class MarginalTarget final : public smc::TemperedModel {
   Eigen::Index trucks() const { return static_cast<Eigen::Index>(speed_mps_.size()); }
   const Eigen::MatrixXd& theta() const { return theta_; }  // 7 x P
   const TableSettings& settings() const { return settings_; }
+  // The tables of this rank's trucks, in truck order (every truck's with one rank).
   const model::TableStore& tables() const { return store_; }
+  const util::Ranks& ranks() const { return *ranks_; }
   // The tables' own check of their z approximation (TruckTable::lateral_error_nats) over the trucks
-  // absorbed by this process since the second (not kept in checkpoints: a diagnostic): the mean of
-  // its absolute value, in nats per truck (NaN before any check).
+  // absorbed by this process since the second, on every rank (not kept in checkpoints: a
+  // diagnostic): the mean of its absolute value, in nats per truck (NaN before any check).
   double lateral_error_mean() const {
     return lateral_checked_ > 0 ? lateral_error_abs_sum_ / static_cast<double>(lateral_checked_)
                                 : std::numeric_limits<double>::quiet_NaN();
@@ -162,18 +171,22 @@ class MarginalTarget final : public smc::TemperedModel {
   const std::vector<double>& sprung_mass_kg() const { return sprung_mass_kg_; }
   const std::vector<Eigen::VectorXd>& observed_if() const { return observed_if_; }
   // Each truck's site, in truck order (indexes sites()).
-  const std::vector<std::uint32_t>& truck_sites() const { return store_.columns().site; }
+  const std::vector<std::uint32_t>& truck_sites() const { return truck_site_; }
   const std::vector<const site::Site*>& sites() const { return sites_; }
+  // Integrator passes spent on this rank's tables (all of them with one rank).
   long long integrator_passes() const { return passes_; }
   // Trucks whose table add_truck() took from a prebuild() (by this process: not in checkpoints).
   long prebuilt_used() const { return prebuilt_used_; }
   int rebuilds() const { return rebuilds_; }
+  // Wall seconds this rank spent building trucks' fits and tables (arrivals, prebuilds, rebuilds)
+  // in this process (not kept in checkpoints: for the scaling figures, README "Scale-out on MPI").
+  double table_seconds() const { return table_seconds_; }
   // The state was read from a format whose truck records name no site (before version 3): the
   // records this build appends would not match the log's, so the whole log must be written anew.
   bool read_old_truck_records() const { return loaded_version_ != 0 && loaded_version_ < 3; }
   // Σ_i ℓ_i(θ) + log p(θ) of particle p as cached (for tests: the density the moves target).
   double cached_log_posterior(Eigen::Index p) const { return base_sum_[p] + inc_[p] + log_prior(p); }
-  // The same recomputed from the tables.
+  // The same recomputed from the tables (collective: every rank calls it).
   double log_posterior(const HyperVector& theta) const;
 
   // Checkpoint: the particles, the data and the tables (so a resume does not rebuild them).
@@ -206,8 +219,8 @@ class MarginalTarget final : public smc::TemperedModel {
   // The table option max_piece_sd_m the cloud implies (Options::lateral_piece_fraction).
   double max_piece_sd(const Eigen::ArrayXd& W) const;
   double log_prior(Eigen::Index p) const { return options_.prior.log_prior(theta_of(p)); }
-  // Σ_i ℓ_i(θ) over trucks [0, end) of a store.
-  double sum_loglik(const model::TableStore& store, const model::FleetMarginal& marginal, std::size_t end,
+  // Σ_i ℓ_i(θ) over every rank's trucks in a store (collective).
+  double sum_loglik(const model::TableStore& store, const model::FleetMarginal& marginal,
                     const HyperVector& theta) const;
   // The settings the cloud implies.
   TableSettings ideal_settings(const Eigen::ArrayXd& W) const;
@@ -224,6 +237,7 @@ class MarginalTarget final : public smc::TemperedModel {
 
   std::vector<const site::Site*> sites_;
   Options options_;
+  const util::Ranks* ranks_;
   long lateral_checked_ = 0;
   double lateral_error_abs_sum_ = 0.0;
   TableSettings settings_;
@@ -234,7 +248,10 @@ class MarginalTarget final : public smc::TemperedModel {
   std::optional<model::FleetMarginal> old_marginal_;
   Mode mode_ = Mode::kIdle;
 
+  // Every truck's data and fit, on every rank (the lattice follows the fits' widths; a rebuild
+  // reads the data of the rank's own trucks); the tables in store_ are this rank's trucks' only.
   std::vector<double> speed_mps_, sprung_mass_kg_;
+  std::vector<std::uint32_t> truck_site_;
   std::vector<Eigen::VectorXd> observed_if_;
   std::vector<model::TruckFit> fits_;
   // Σ_i log of each fit's likelihood sd per unit σ (k and k_t), in truck order: the geometric mean
@@ -267,11 +284,13 @@ class MarginalTarget final : public smc::TemperedModel {
     model::TruckFit fit;
     model::TruckTable table;
   };
-  std::vector<Prebuilt> prebuilt_;
+  std::vector<Prebuilt> prebuilt_;  // this rank's trucks of the span [prebuilt_from_, prebuilt_until_)
+  std::int64_t prebuilt_from_ = 0, prebuilt_until_ = 0;
   std::uint64_t freeze_id_ = 0;
   // The format version of the state load_particles() read (truck records before 3 name no site).
   std::uint32_t loaded_version_ = 0;
   long prebuilt_used_ = 0;
+  double table_seconds_ = 0.0;
 };
 
 }  // namespace ssrfleet::fleet

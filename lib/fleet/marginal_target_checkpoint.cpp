@@ -35,7 +35,12 @@ void MarginalTarget::save_particles(BinaryWriter& out) const {
   if (population_at_rebuild_) out.value(*population_at_rebuild_);
   out.value<std::int64_t>(trucks_at_last_rebuild_);
   out.value<std::int32_t>(rebuilds_);
-  out.value<std::int64_t>(passes_);
+  // Every rank's passes (each counts its own tables'): the same count as one process's. Collective;
+  // an exact sum adds whole numbers below 2^50 exactly.
+  util::ExactSum passes;
+  passes.add(static_cast<double>(passes_));
+  ranks_->sum(&passes, 1);
+  out.value<std::int64_t>(static_cast<std::int64_t>(passes.value()));
   out.value<std::uint8_t>(frozen_ ? 1 : 0);
   if (frozen_) {
     // What frozen_table_options() took from the cloud; the rest is options_.table.
@@ -62,12 +67,14 @@ static_assert(sizeof(model::TruckFit) == 8 * sizeof(double) + 2 * sizeof(std::in
 
 void MarginalTarget::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const {
   for (std::size_t i = begin; i < end; ++i) {
+    // A truck's record holds its table, which only its own rank keeps (MarginalSmc gathers them).
+    if (!ranks_->owns(i)) throw std::logic_error("MarginalTarget::save_trucks: truck " + std::to_string(i) + " is another rank's");
     out.value<std::uint32_t>(truck_sites()[i]);
     out.value(speed_mps_[i]);
     out.value(sprung_mass_kg_[i]);
     out.matrix(observed_if_[i]);
     out.value(fits_[i]);
-    const model::TableView v = store_.view(i);
+    const model::TableView v = store_.view(i / static_cast<std::size_t>(ranks_->size()));
     out.value<std::uint32_t>(static_cast<std::uint32_t>(v.nodes));
     out.value(v.u_ref);
     auto write = [&](const auto* p) {
@@ -104,6 +111,7 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   // range is damage (and would overflow the migrated generation, marginal_smc.hpp).
   if (rebuilds_ < 0 || rebuilds_ > 1'000'000) in.fail("rebuilds", "implausible rebuild count " + std::to_string(rebuilds_));
   passes_ = in.value<std::int64_t>("passes");
+  if (ranks_->rank() != 0) passes_ = 0;  // the count so far stays with rank 0 (save_particles adds the ranks')
   frozen_.reset();
   frozen_until_ = 0;
   prebuilt_.clear();
@@ -137,6 +145,7 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   speed_mps_.clear();
   sprung_mass_kg_.clear();
   observed_if_.clear();
+  truck_site_.clear();
   fits_.clear();
   sum_log_sd_k_ = sum_log_sd_kt_ = 0.0;
   // Nothing is sized by n: it is not checked (its seal comes after the truck records), and up to 1e8
@@ -157,6 +166,8 @@ void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
       in.fail("truck site", "site " + std::to_string(site) + " of a state with " + std::to_string(sites_.size()) +
                                 " site(s)");
     }
+    const std::uint64_t truck = speed_mps_.size();
+    truck_site_.push_back(site);
     speed_mps_.push_back(in.value<double>("truck speed"));
     sprung_mass_kg_.push_back(in.value<double>("truck mass"));
     observed_if_.push_back(in.matrix("impact factors", site_of(site).sensors(), 1));
@@ -180,7 +191,7 @@ void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
     if (!(t.u_ref > 0.0) || !std::isfinite(speed_mps_.back()) || !std::isfinite(sprung_mass_kg_.back())) {
       in.fail("truck", "a truck record holds impossible values");
     }
-    store_.append(t, site);
+    if (ranks_->owns(truck)) store_.append(t, site);  // another rank's table is read past
   }
 }
 

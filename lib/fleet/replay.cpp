@@ -1,6 +1,7 @@
 #include "fleet/replay.hpp"
 
 #include <chrono>
+#include <string>
 
 #include "util/errors.hpp"
 
@@ -15,7 +16,14 @@ ReplaySummary replay(OnlineFit& fit, const std::vector<records::WimRecord>& reco
   if (options.final_sweeps < -1) throw UsageError("replay: final_sweeps must be >= 0 (or -1 for the schedule's)");
   ReplaySummary s;
   const auto started = Clock::now();
-  for (std::size_t t = 0; t < records.size(); ++t) {
+  // A fit restored from a checkpoint (fit --checkpoint) goes on after the trucks it holds, which the
+  // caller has checked are the records' first ones.
+  const auto first = static_cast<std::size_t>(fit.trucks_seen());
+  if (first > records.size()) {
+    throw UsageError("replay: the fit holds " + std::to_string(first) + " trucks, more than the " +
+                     std::to_string(records.size()) + " records");
+  }
+  for (std::size_t t = first; t < records.size(); ++t) {
     fit.prepare(records, t);
     const smc::StageSummary stage = fit.absorb(records[t]);
     if (options.after_record) options.after_record(t, stage, fit);

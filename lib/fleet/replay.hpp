@@ -30,7 +30,8 @@ struct ReplaySummary {
   double final_s = 0.0;   // wall time of the final sweeps
 };
 
-// UsageError if final_sweeps < -1.
+// Starts after the trucks the fit already holds (a fit restored from a checkpoint: its trucks must be
+// the records' first ones). UsageError if final_sweeps < -1 or the fit holds more trucks than records.
 ReplaySummary replay(OnlineFit& fit, const std::vector<records::WimRecord>& records, const ReplayOptions& options);
 
 }  // namespace ssrfleet::fleet

@@ -106,7 +106,15 @@ double FleetMarginal::log_likelihood(const TableView& table, const ThetaTerms& t
 
 void FleetMarginal::sum_log_likelihood(const TableStore& store, std::size_t end, const ThetaTerms* terms,
                                        std::size_t count, double* sums) const {
-  for (std::size_t p = 0; p < count; ++p) sums[p] = terms[p].inside ? 0.0 : kNegInf;
+  std::vector<util::ExactSum> exact(count);
+  add_log_likelihoods(store, end, terms, count, exact.data());
+  for (std::size_t p = 0; p < count; ++p) sums[p] = exact[p].value();
+}
+
+void FleetMarginal::add_log_likelihoods(const TableStore& store, std::size_t end, const ThetaTerms* terms,
+                                        std::size_t count, util::ExactSum* sums) const {
+  for (std::size_t p = 0; p < count; ++p)
+    if (!terms[p].inside) sums[p].add(kNegInf);
   const auto& offset = store.columns().offset;
   std::size_t first = 0;
   while (first < end) {
@@ -114,13 +122,8 @@ void FleetMarginal::sum_log_likelihood(const TableStore& store, std::size_t end,
     std::size_t last = first + 1;
     while (last < end && offset[last] - offset[first] < kBlockEntries) ++last;
     for (std::size_t p = 0; p < count; ++p) {
-      double s = sums[p];
-      if (s == kNegInf) continue;
-      for (std::size_t i = first; i < last; ++i) {
-        s += log_likelihood(store.view(i), terms[p]);
-        if (s == kNegInf) break;
-      }
-      sums[p] = s;
+      util::ExactSum& s = sums[p];
+      for (std::size_t i = first; i < last && !s.minus_infinity(); ++i) s.add(log_likelihood(store.view(i), terms[p]));
     }
     first = last;
   }

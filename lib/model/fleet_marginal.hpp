@@ -35,6 +35,7 @@
 #include "model/fleet_model.hpp"
 #include "model/table_store.hpp"
 #include "model/truck_table.hpp"
+#include "util/exact_sum.hpp"
 
 namespace ssrfleet::model {
 
@@ -79,12 +80,17 @@ class FleetMarginal {
   // given θ puts weight ∝ exp(e_g) on entry g: model/table_proposal.hpp).
   void entry_exponents(const TableView& table, const ThetaTerms& terms, float* exponents) const;
   // Σ_{i<end} ℓ_i(θ_p) for many particles at once: sums[p] for terms[p], p < count (-inf outside
-  // the support). The same bits as adding log_likelihood() over the trucks in order, particle by
-  // particle; but the trucks are visited in blocks that stay in the core's cache while every
-  // particle reads them, so a store larger than the cache (≈ 5 MB per 1,000 trucks) is read from
-  // memory once per block of particles instead of once per particle (kBlockEntries).
+  // the support). The trucks' ℓ_i are added exactly (util/exact_sum.hpp), so the bits do not depend
+  // on the order of the trucks, on the blocks below, or on how the trucks are split between MPI
+  // ranks (add_log_likelihoods, then Ranks::sum). The trucks are visited in blocks that stay in the
+  // core's cache while every particle reads them, so a store larger than the cache (≈ 5 MB per
+  // 1,000 trucks) is read from memory once per block of particles instead of once per particle
+  // (kBlockEntries).
   void sum_log_likelihood(const TableStore& store, std::size_t end, const ThetaTerms* terms, std::size_t count,
                           double* sums) const;
+  // The same, added to exact partial sums (sums[p] += Σ_{i<end} ℓ_i(θ_p)); one whose -inf is set is skipped.
+  void add_log_likelihoods(const TableStore& store, std::size_t end, const ThetaTerms* terms, std::size_t count,
+                           util::ExactSum* sums) const;
   // Table entries per block of trucks: 16,384 entries × 36 bytes ≈ 590 kB, within a 1 MB L2.
   static constexpr std::size_t kBlockEntries = 16384;
 

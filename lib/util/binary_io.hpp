@@ -11,8 +11,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <istream>
 #include <ostream>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 
@@ -54,16 +56,29 @@ class BinaryWriter {
     last_seal_ = hash_;
     out_.write(reinterpret_cast<const char*>(&last_seal_), sizeof last_seal_);
     hash_ = detail::kFnvOffset;
+    since_seal_ = 0;
   }
   // The checksum the last seal() wrote (a record elsewhere may name the file by it).
   std::uint64_t last_seal() const { return last_seal_; }
+  // Appends bytes that another writer wrote from a seal boundary and ended with seal() (a record
+  // built elsewhere: on another MPI rank). Only at a seal boundary of this writer (nothing written
+  // since its last seal), so they read back exactly as if this writer had written them.
+  void sealed_bytes(const std::string& bytes) {
+    if (since_seal_ != 0 || bytes.size() < sizeof last_seal_) {
+      throw std::logic_error("BinaryWriter::sealed_bytes: not at a seal boundary, or not a sealed record");
+    }
+    out_.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    std::memcpy(&last_seal_, bytes.data() + bytes.size() - sizeof last_seal_, sizeof last_seal_);
+  }
 
  private:
   void put(const char* bytes, std::size_t n) {
     out_.write(bytes, static_cast<std::streamsize>(n));
     hash_ = detail::fnv1a(hash_, bytes, n);
+    since_seal_ += n;
   }
   std::ostream& out_;
+  std::uint64_t since_seal_ = 0;
   std::uint64_t hash_ = detail::kFnvOffset;
   std::uint64_t last_seal_ = 0;
 };

@@ -1,0 +1,38 @@
+// The checkpoint of `fit --checkpoint DIR` (README "Checkpoints of a fit"): a long offline fit, on
+// one process or on MPI ranks, that stops (a lost rank, a killed job, a full disk) resumes where
+// its last checkpoint left it, with the bits of a run that never stopped, on any number of ranks.
+// One file per class's fit, DIR/fit.SEED.ckpt (SEED: the class's own seed), replaced atomically:
+//   a sealed head: magic "SSRFFITK", format version, the core's fixed-size state (OnlineFit::
+//   save_state: particles, weights, settings, the trucks' count; the site and seed it belongs to);
+//   then each truck's record (id, data, fit, table), sealed one by one (OnlineFit::save_trucks);
+//   nothing after the last.
+// On several ranks every rank takes part (each truck's record comes from the rank holding its
+// table) and rank 0 writes the file; every rank reads the whole file on a resume and keeps its own
+// trucks' tables, so the rank count may differ from the run that wrote it (the file is the one
+// process would write). The ranks must see DIR on a shared file system.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fleet/online_fit.hpp"
+#include "records/wim_record.hpp"
+#include "util/ranks.hpp"
+
+namespace ssrfleet::io {
+
+std::string fit_checkpoint_path(const std::string& dir, std::uint64_t seed);
+
+// Collective over `ranks` (every rank calls it; rank 0 writes). IoError naming the file if it
+// cannot be written (the previous checkpoint, if any, stays whole).
+void write_fit_checkpoint(const std::string& path, const fleet::OnlineFit& fit, const util::Ranks& ranks);
+
+// If `path` exists: restores `fit` (new, of the same sites and seed) from it and returns the trucks it
+// holds, after checking them against the records' first ones (id, site, speed, mass and impact
+// factors; a DataError naming the file and the truck if the log changed since). 0 if there is no file.
+std::size_t read_fit_checkpoint(const std::string& path, fleet::OnlineFit& fit,
+                                const std::vector<records::WimRecord>& records);
+
+}  // namespace ssrfleet::io
