@@ -65,8 +65,8 @@ records=$((3 * trucks))
   echo "started $started, written $(date -u +%FT%TZ). $reps runs of each variant in turn; medians."
   echo "The three posterior files were byte-identical in every round."
   echo
-  echo "| variant | wall s (median) | speed-up over one | ms per record | tables s | stages and moves s | move phases | truck stage without moves, ms | rank 0 sent | collectives |"
-  echo "|---|---|---|---|---|---|---|---|---|---|"
+  echo "| variant | wall s (median) | speed-up over one | ms per record | tables s (rank 0) | tables s per rank | truck stages with moves s | final sweeps s | truck stages without moves, ms each | rank 0 sent bytes | collectives |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|"
   base=""
   for variant in one threads ranks; do
     times=()
@@ -74,22 +74,53 @@ records=$((3 * trucks))
     m=$(median "${times[@]}")
     [[ -n $base ]] || base=$m
     line=$(grep -h "rank(s) x" "$variant.$reps.err" | tail -1)
-    tables=$(sed -E 's/.*of which tables ([0-9.]+) s.*/\1/' <<< "$line")
-    moves=$(sed -E 's/.*stages and moves ([0-9.-]+) s.*/\1/' <<< "$line")
-    phases=$(sed -E 's/.*; ([0-9]+) move phases.*/\1/' <<< "$line")
-    plain=$(sed -E 's/.*without moves, ([0-9.]+) ms each.*/\1/' <<< "$line")
-    bytes="-"; calls="-"
-    if grep -q "rank 0 sent" <<< "$line"; then
-      bytes=$(sed -E 's/.*rank 0 sent ([0-9]+) bytes.*/\1/' <<< "$line")
-      calls=$(sed -E 's/.*bytes in ([0-9]+) collectives.*/\1/' <<< "$line")
-    fi
-    printf '| %s | %.1f | %.2f | %.2f | %s | %s | %s | %s | %s | %s |\n' "$variant" "$m" "$(calc "$base / $m")" \
-      "$(calc "1000 * $m / $records")" "$tables" "$moves" "$phases" "$plain" "$bytes" "$calls"
+    field() { sed -nE "s/$1/\1/p" <<< "$line"; }
+    tables=$(field '.*of which tables ([0-9.]+) s.*')
+    moved=$(field '.*sweeps in all ([0-9.]+) s.*')
+    final=$(field '.*final sweeps ([0-9.]+) s.*')
+    plain=$(field '.* s, ([0-9.]+) ms each.*')
+    per_rank=$(field '.*tables per rank ([0-9.]+ to [0-9.]+) s.*')
+    bytes=$(field '.*rank 0 sent ([0-9]+) bytes.*')
+    calls=$(field '.*bytes in ([0-9]+) collectives.*')
+    printf '| %s | %.1f | %.2f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n' "$variant" "$m" "$(calc "$base / $m")" \
+      "$(calc "1000 * $m / $records")" "$tables" "${per_rank:--}" "$moved" "$final" "$plain" "${bytes:--}" "${calls:--}"
     if [[ $variant == ranks ]]; then
       echo
-      printf 'Traffic of rank 0 with 2 ranks: %.0f bytes and %.1f collectives per record; %s bytes in %s calls over %s move phases.\n' \
-        "$(calc "$bytes / $records")" "$(calc "$calls / $records")" "$bytes" "$calls" "$phases"
+      printf 'Traffic of rank 0 with 2 ranks: %.0f bytes and %.2f collectives per record (%s bytes in %s calls).\n' \
+        "$(calc "$bytes / $records")" "$(calc "$calls / $records")" "$bytes" "$calls"
     fi
+  done
+  # The projection (README "Scale-out on MPI"), from the figures above: per record, the work that
+  # splits over R ranks (tables, stages with moves, final sweeps of the one-thread run), the work
+  # that does not (the rest of that run: each truck's own stage and bookkeeping), and the
+  # collectives at R ranks, each costed as a tree of ceil(log2 R) steps there and back:
+  # 2 ceil(log2 R) (alpha + payload / beta), with rank 0's calls and bytes per record at 2 ranks.
+  # Network: HDR InfiniBand, beta = 25 GB/s (200 Gb/s per port) and an MPI latency alpha = 2 us
+  # per step (the ConnectX-6 adapter's quoted sub-0.6 us, times 3 for switches and the MPI stack:
+  # an assumption, not a measurement).
+  line=$(grep -h "rank(s) x" "one.$reps.err" | tail -1)
+  field() { sed -nE "s/$1/\\1/p" <<< "$line"; }
+  total_one=$(field '.*thread\(s\): ([0-9.]+) s, of which.*')
+  par=$(calc "($(field '.*of which tables ([0-9.]+) s.*') + $(field '.*sweeps in all ([0-9.]+) s.*') + $(field '.*final sweeps ([0-9.]+) s.*')) / $records")
+  ser=$(calc "$total_one / $records - $par")
+  echo
+  echo "## Projection: a 200-site, 20-million-record year (one thread per rank)"
+  echo
+  printf 'Per record, from the one-thread run: %.2f ms that split over the ranks, %.3f ms that do not.\n' \
+    "$(calc "1000 * $par")" "$(calc "1000 * $ser")"
+  echo "Collectives at R ranks: calls and bytes per record as rank 0 sent them at 2 ranks, each a tree of"
+  echo "ceil(log2 R) steps there and back; HDR InfiniBand, 25 GB/s, 2 us per step (an assumption)."
+  echo
+  echo "| ranks | split work s | serial work s | communication s | wall h | records/s | communication / split work |"
+  echo "|---|---|---|---|---|---|---|"
+  for R in 8 64 512; do
+    steps=$(awk -v r="$R" 'BEGIN { s = 0; while (2^s < r) s++; print s }')
+    awk -v n=20e6 -v r="$R" -v st="$steps" -v par="$par" -v ser="$ser" -v calls="$(calc "$calls / $records")" \
+        -v bytes="$(calc "$bytes / $records")" 'BEGIN {
+      split_s = n * par / r; serial_s = n * ser;
+      comm_s = n * 2 * st * (calls * 2e-6 + bytes / 25e9);
+      wall = split_s + serial_s + comm_s;
+      printf "| %d | %.0f | %.0f | %.0f | %.2f | %.0f | %.2f |\n", r, split_s, serial_s, comm_s, wall / 3600, n / wall, comm_s / split_s }'
   done
   echo
   echo "fit's summary lines (last round):"

@@ -172,14 +172,15 @@ fleet::PosteriorCloud fit_smc_on(const std::vector<const site::Site*>& sites,
   }
   // Truck stages that ran no move: the part of a truck's cost that more ranks do not shrink (its
   // own ℓ for every particle, on its rank; the reweighting), for the summary line below.
-  long plain_stages = 0;
-  double plain_stage_s = 0.0;
+  long plain_stages = 0, moved_stages = 0, sweeps = 0;
+  double plain_stage_s = 0.0, moved_stage_s = 0.0;
   replay.after_record = [&](std::size_t t, const smc::StageSummary& stage, const fleet::OnlineFit& fit) {
     if (report) report(t, stage, fit);
-    if (std::none_of(stage.steps.begin(), stage.steps.end(), [](const auto& step) { return step.mh.sweeps > 0; })) {
-      ++plain_stages;
-      plain_stage_s += stage.wall_time_s;
-    }
+    long stage_sweeps = 0;
+    for (const auto& step : stage.steps) stage_sweeps += step.mh.sweeps;
+    sweeps += stage_sweeps;
+    (stage_sweeps > 0 ? moved_stages : plain_stages) += 1;
+    (stage_sweeps > 0 ? moved_stage_s : plain_stage_s) += stage.wall_time_s;
     if (!checkpoint.empty() && checkpoint_due(t)) {
       io::write_fit_checkpoint(checkpoint, fit, ranks);
       last_checkpoint = std::chrono::steady_clock::now();
@@ -191,16 +192,27 @@ fleet::PosteriorCloud fit_smc_on(const std::vector<const site::Site*>& sites,
     progress->unsetf(std::ios::floatfield);
   }
   // Where the time went, and what the ranks exchanged (README "Scale-out on MPI" takes its
-  // figures from this line).
-  if (const fleet::MarginalSmc* m = smc->marginal(); progress && m != nullptr) {
+  // figures from this line). Every rank's table time is gathered first (a collective, so every
+  // rank takes part, printing or not).
+  std::vector<std::string> each;
+  if (const fleet::MarginalSmc* m = smc->marginal(); m != nullptr && ranks.size() > 1)
+    each = ranks.gather(std::to_string(m->target().table_seconds()), 0);
+  const util::Ranks::Traffic sent = ranks.traffic();
+  if (const fleet::MarginalSmc* m = smc->marginal(); m != nullptr && progress) {
     const double tables = m->target().table_seconds(), total = done.replay_s + done.final_s;
-    const util::Ranks::Traffic sent = ranks.traffic();
     *progress << std::fixed << std::setprecision(2) << "fit: " << ranks.size() << " rank(s) x " << o.sampler().threads
               << " thread(s): " << total << " s, of which tables " << tables << " s (rank 0's trucks), stages and moves "
-              << total - tables << " s; " << m->sampler().state().moves_run << " move phases; " << plain_stages
-              << " truck stages without moves, " << std::setprecision(3)
-              << (plain_stages > 0 ? 1e3 * plain_stage_s / static_cast<double>(plain_stages) : 0.0) << " ms each";
-    if (ranks.size() > 1) *progress << "; rank 0 sent " << sent.bytes << " bytes in " << sent.calls << " collectives";
+              << total - tables << " s (" << moved_stages << " truck stages with " << sweeps << " sweeps in all "
+              << moved_stage_s << " s; " << done.final_sweeps << " final sweeps " << done.final_s << " s; "
+              << plain_stages << " truck stages without moves " << plain_stage_s << " s, " << std::setprecision(3)
+              << (plain_stages > 0 ? 1e3 * plain_stage_s / static_cast<double>(plain_stages) : 0.0) << " ms each)";
+    if (!each.empty()) {
+      std::vector<double> t;
+      for (const std::string& e : each) t.push_back(std::stod(e));
+      *progress << "; tables per rank " << *std::min_element(t.begin(), t.end()) << " to "
+                << *std::max_element(t.begin(), t.end()) << " s; rank 0 sent " << sent.bytes << " bytes in "
+                << sent.calls << " collectives";
+    }
     *progress << "\n";
     progress->unsetf(std::ios::floatfield);
   }

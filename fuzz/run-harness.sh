@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs one libFuzzer harness for a given time over a copy of its seed corpus and prints one line:
-#   <name>: <execs> execs, cov <cov>, ft <ft>, corpus <n> inputs, crashes <k>
+#   <name>: <execs> execs in <wall> s (CPU <cpu> s), cov <cov>, ft <ft>, corpus <n> inputs, crashes <k>
 # usage: fuzz/run-harness.sh FUZZER SEED_CORPUS_DIR WORK_DIR SECONDS
 # The repository's corpus is never written: the run works in WORK_DIR/corpus (new inputs land there)
 # and WORK_DIR/artifacts (crash-*, timeout-*, oom-*, leak-* files, each a reproducer:
@@ -16,17 +16,21 @@ cp -r "$seeds"/. "$work/corpus/"
 # Inputs up to 64 KiB, or the largest seed (a stream state holds whole truck tables).
 max_len=$(find "$seeds" -type f -printf '%s\n' | sort -n | tail -1)
 (( max_len < 65536 )) && max_len=65536
-status=0
 start=$SECONDS
-"$fuzzer" "$work/corpus" -max_total_time="$seconds" -print_final_stats=1 -timeout=10 \
+# -max_total_time is wall time: on a shared machine the harness gets less CPU than that, so the CPU
+# seconds it used (user + system, bash's `time`) are reported beside it.
+TIMEFORMAT='%U %S'
+{ time { "$fuzzer" "$work/corpus" -max_total_time="$seconds" -print_final_stats=1 -timeout=10 \
   -malloc_limit_mb=1024 -rss_limit_mb=2048 -max_len="$max_len" -artifact_prefix="$work/artifacts/" \
-  >"$work/log.txt" 2>&1 || status=$?
+  >"$work/log.txt" 2>&1; echo $? > "$work/status"; }; } 2> "$work/cpu.txt"
+status=$(cat "$work/status")
 took=$((SECONDS - start))
+cpu=$(awk '{printf "%.0f", $1 + $2}' "$work/cpu.txt")
 stat() { grep -E "^stat::$1:" "$work/log.txt" | tail -1 | awk '{print $2}'; }
 cov=$(grep -E '#[0-9]+.*cov: ' "$work/log.txt" | tail -1 | sed -E 's/.*cov: ([0-9]+).*/\1/' || true)
 ft=$(grep -E '#[0-9]+.*ft: ' "$work/log.txt" | tail -1 | sed -E 's/.*ft: ([0-9]+).*/\1/' || true)
 crashes=$(find "$work/artifacts" -type f | wc -l)
-echo "$name: $(stat number_of_executed_units) execs in ${took} s, cov ${cov:-?}, ft ${ft:-?}," \
+echo "$name: $(stat number_of_executed_units) execs in ${took} s (CPU ${cpu} s), cov ${cov:-?}, ft ${ft:-?}," \
      "corpus $(find "$work/corpus" -type f | wc -l) inputs, crashes $crashes (log $work/log.txt)"
 if [[ $crashes -gt 0 || $status -ne 0 ]]; then
   find "$work/artifacts" -type f | sed 's/^/  artifact: /'
