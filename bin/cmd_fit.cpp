@@ -50,6 +50,8 @@ int run_fit(int argc, const char* const argv[]) {
     return 0;
   }
   check_particles(fit.particles);
+  // Rank 0 reports for every rank (another rank's progress would pile up unseen: main() drops it).
+  quiet = quiet || process_ranks().rank() != 0;
   fit.final_sweeps_given = !vm["final-sweeps"].defaulted();
   fit.max_sweeps_given = !vm["max-sweeps"].defaulted();
   fit.core_given = !vm["core"].defaulted();

@@ -11,6 +11,7 @@
 #include "process_ranks.hpp"
 #include "fit_methods.hpp"
 #include "fleet/online_fit.hpp"
+#include "fleet/joint_sites.hpp"
 #include "fleet/replay.hpp"
 #include "io/fit_checkpoint.hpp"
 #include "util/errors.hpp"
@@ -123,13 +124,18 @@ fleet::PosteriorCloud fit_smc_on(const std::vector<const site::Site*>& sites,
   auto smc = fleet::make_online_fit(sites, o);
   const std::size_t n = records.size();
   const util::Ranks& ranks = process_ranks();
-  const std::string checkpoint =
-      flags.checkpoint_dir.empty() ? std::string() : io::fit_checkpoint_path(flags.checkpoint_dir, seed);
+  const std::string checkpoint = flags.checkpoint_dir.empty() ? std::string()
+                                 : io::fit_checkpoint_path(flags.checkpoint_dir, seed, fleet::sites_fingerprint(sites));
+  // What a checkpoint must have been made with, besides the sites and the seed.
+  std::ostringstream checkpoint_options;
+  checkpoint_options << std::setprecision(17) << "particles=" << o.sampler().particles
+                     << " cess=" << o.sampler().tempering.cess_target << " max_sweeps=" << o.sampler().schedule.max_sweeps;
+  std::size_t resumed = 0;
   if (!checkpoint.empty()) {
-    if (const std::size_t resumed = io::read_fit_checkpoint(checkpoint, *smc, records); resumed > 0 && progress) {
-      *progress << "fit: resumed from " << checkpoint << " at truck " << resumed << "/" << n << "\n";
-    }
+    resumed = io::read_fit_checkpoint(checkpoint, *smc, records, checkpoint_options.str());
+    if (resumed > 0 && progress) *progress << "fit: resumed from " << checkpoint << " at truck " << resumed << "/" << n << "\n";
   }
+  io::check_ranks_agree(ranks, records, resumed);
   // When the next checkpoint is due: rank 0's clock decides for every rank (they must write together).
   auto last_checkpoint = std::chrono::steady_clock::now();
   auto checkpoint_due = [&](std::size_t t) {
@@ -182,7 +188,14 @@ fleet::PosteriorCloud fit_smc_on(const std::vector<const site::Site*>& sites,
     (stage_sweeps > 0 ? moved_stages : plain_stages) += 1;
     (stage_sweeps > 0 ? moved_stage_s : plain_stage_s) += stage.wall_time_s;
     if (!checkpoint.empty() && checkpoint_due(t)) {
-      io::write_fit_checkpoint(checkpoint, fit, ranks);
+      // A checkpoint that cannot be written (a full disk) is insurance lost, not the fit: warn and
+      // go on (only rank 0 writes, so only it can fail, after its part in the collectives).
+      try {
+        io::write_fit_checkpoint(checkpoint, fit, ranks, checkpoint_options.str());
+      } catch (const IoError& e) {
+        std::cerr << "ssrfleet fit: warning: checkpoint after truck " << (t + 1) << " not written: " << e.what()
+                  << "; the fit goes on (the last checkpoint, if any, is still whole)\n";
+      }
       last_checkpoint = std::chrono::steady_clock::now();
     }
   };

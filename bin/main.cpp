@@ -43,35 +43,28 @@ void print_usage(std::ostream& os) {
   for (const auto& [name, cmd] : commands()) os << "  " << name << std::string(12 - name.size(), ' ') << cmd.summary << "\n";
 }
 
-// The command's status. every_rank_alike: the error (if any) is one that every MPI rank meets at
-// the same point, reading the same inputs (so rank 0 alone reports it and the ranks end together);
-// any other error may be this rank's alone and ends them all (abort_process_ranks).
-struct Outcome {
-  int status = 0;
-  bool every_rank_alike = true;
-};
-
-Outcome run_command(int argc, char* argv[]) {
+// The command's status (main() ends every rank on an error: see there).
+int run_command(int argc, char* argv[]) {
   if (argc < 2) {
     print_usage(std::cerr);
-    return {64, true};
+    return 64;
   }
   const std::string name = argv[1];
   if (name == "--help" || name == "-h" || name == "help") {
     print_usage(std::cout);
-    return {0, true};
+    return 0;
   }
   if (name == "--version") {
     std::cout << "ssrfleet " << SSRFLEET_VERSION << "\n";
-    return {0, true};
+    return 0;
   }
   const auto it = commands().find(name);
   if (it == commands().end()) {
     std::cerr << "ssrfleet: unknown command '" << name << "'\n\n";
     print_usage(std::cerr);
-    return {64, true};
+    return 64;
   }
-  // Rank 0 speaks for every rank; another rank's message (an error of its own) names it.
+  // Rank 0 speaks for every rank; another rank's message names it.
   const std::string prefix =
       "ssrfleet " + name + (ssrfleet::cli::process_ranks().rank() == 0 ? "" : ssrfleet::cli::rank_label()) + ": ";
   try {
@@ -80,41 +73,46 @@ Outcome run_command(int argc, char* argv[]) {
       throw ssrfleet::UsageError("runs on one process: of the commands, only fit spreads over MPI ranks "
                                  "(mpirun -np R ssrfleet-mpi fit ...); run ssrfleet " + name + " without mpirun");
     }
-    return {it->second.run(argc - 1, argv + 1), true};
+    return it->second.run(argc - 1, argv + 1);
   } catch (const ssrfleet::UsageError& e) {
     std::cerr << prefix << e.what() << "\n";
-    return {64, true};
+    return 64;
   } catch (const ssrfleet::DataError& e) {
     std::cerr << prefix << e.what() << "\n";
-    return {65, true};
+    return 65;
   } catch (const ssrfleet::MissingInputError& e) {
     std::cerr << prefix << e.what() << "\n";
-    return {66, true};
+    return 66;
   } catch (const ssrfleet::BusyError& e) {
     std::cerr << prefix << e.what() << "\n";
-    return {75, false};
+    return 75;
   } catch (const ssrfleet::IoError& e) {
     std::cerr << prefix << e.what() << "\n";
-    return {74, false};
+    return 74;
   } catch (const ssrfleet::NumericalError& e) {
     std::cerr << prefix << "numerical failure: " << e.what() << "\n";
-    return {70, false};
+    return 70;
   } catch (const std::invalid_argument& e) {
     std::cerr << prefix << e.what() << "\n";
-    return {64, true};
+    return 64;
   } catch (const std::out_of_range& e) {
     std::cerr << prefix << e.what() << "\n";
-    return {64, true};
+    return 64;
   } catch (const std::exception& e) {
     std::cerr << prefix << "internal error: " << e.what() << "\n";
-    return {70, false};
+    return 70;
   }
 }
 
 }  // namespace
 
 int main(int argc, char* argv[]) {
-  ssrfleet::cli::start_process_ranks(&argc, &argv);
+  try {
+    ssrfleet::cli::start_process_ranks(&argc, &argv);
+  } catch (const std::exception& e) {
+    std::cerr << "ssrfleet: cannot start: " << e.what() << "\n";
+    return 70;
+  }
   // Rank 0 speaks for every rank: the others' standard output and error go nowhere, except for an
   // error of their own (below, which must be seen: it ends the run).
   std::ostringstream quiet_out, quiet_err;
@@ -125,13 +123,17 @@ int main(int argc, char* argv[]) {
     std::cout.rdbuf(quiet_out.rdbuf());
     std::cerr.rdbuf(quiet_err.rdbuf());
   }
-  const Outcome outcome = run_command(argc, argv);
+  const int status = run_command(argc, argv);
   std::cout.rdbuf(out);
   std::cerr.rdbuf(err);
-  if (outcome.status != 0 && !outcome.every_rank_alike) {
+  // On several ranks any error ends the job: even one that every rank would meet alike (a bad
+  // option) may have met only some of them (a file one rank could not read), and a rank that
+  // finishes while the others wait in a collective would leave mpirun hanging. A rank other than 0
+  // shows its message (it names the rank) before the abort.
+  if (status != 0 && ssrfleet::cli::process_ranks().size() > 1) {
     if (!speaks) std::cerr << quiet_err.str();
-    ssrfleet::cli::abort_process_ranks(outcome.status);
+    ssrfleet::cli::abort_process_ranks(status);
   }
   ssrfleet::cli::stop_process_ranks();
-  return outcome.status;
+  return status;
 }

@@ -1,5 +1,6 @@
 // ssrfleet-mpi: the processes mpirun started, each one rank of MPI_COMM_WORLD.
 #include <memory>
+#include <stdexcept>
 
 #include <mpi.h>
 
@@ -17,7 +18,14 @@ std::unique_ptr<mpi::MpiRanks>& ranks() {
 
 void start_process_ranks(int* argc, char*** argv) {
   // One thread calls MPI (the SMC's worker threads never do: collectives run between the loops).
-  MPI_Init(argc, argv);
+  int provided = 0;
+  if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
+    throw std::runtime_error("MPI_Init_thread failed");
+  }
+  if (provided < MPI_THREAD_FUNNELED) {
+    MPI_Finalize();
+    throw std::runtime_error("this MPI gives no thread support (MPI_THREAD_FUNNELED); ssrfleet-mpi needs it");
+  }
   ranks() = std::make_unique<mpi::MpiRanks>();
 }
 

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <catch2/catch.hpp>
 
@@ -30,6 +31,16 @@ void write_head(const std::string& from, const std::string& to, int n) {
 }
 
 const char* kFit = " --particles 128 --threads 1 --seed 6 --quiet";
+
+// The one checkpoint file of seed 6 in `dir` (fit.6.KEY.ckpt, KEY from the site), "" if none or several.
+std::string checkpoint_in(const std::string& dir) {
+  std::vector<std::string> found;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.starts_with("fit.6.") && name.ends_with(".ckpt")) found.push_back(e.path().string());
+  }
+  return found.size() == 1 ? found.front() : "";
+}
 }  // namespace
 
 TEST_CASE("fit --checkpoint goes on from a checkpoint, over a log grown since, with the bits of a straight fit",
@@ -47,7 +58,7 @@ TEST_CASE("fit --checkpoint goes on from a checkpoint, over a log grown since, w
                                       " --checkpoint-every-trucks 15 --out " + q(dir.file("head.json")), dir);
   INFO(first.err);
   REQUIRE(first.status == 0);
-  REQUIRE(std::filesystem::exists(ckpt + "/fit.6.ckpt"));
+  REQUIRE_FALSE(checkpoint_in(ckpt).empty());
   // The whole log with the same directory: trucks 41-70 only, then the final sweeps.
   const auto grown = run_ssrfleet("fit " + q(log) + " --particles 128 --threads 2 --seed 6 --checkpoint " + q(ckpt) +
                                       " --out " + q(dir.file("grown.json")), dir);
@@ -71,7 +82,15 @@ TEST_CASE("fit --checkpoint refuses a checkpoint of another log, a damaged one, 
   REQUIRE(run_ssrfleet("simulate --trucks 12 --seed 3 --quiet --out " + q(other), dir).status == 0);
   std::filesystem::create_directory(ckpt);
   REQUIRE(run_ssrfleet("fit " + q(log) + kFit + " --checkpoint " + q(ckpt) + " --out " + q(dir.file("p.json")), dir).status == 0);
-  const std::string file = ckpt + "/fit.6.ckpt";
+  const std::string file = checkpoint_in(ckpt);
+  REQUIRE_FALSE(file.empty());
+
+  // Other options that change the run from a state: refused, naming both.
+  const auto other_options = run_ssrfleet("fit " + q(log) + " --particles 64 --threads 1 --seed 6 --quiet --checkpoint " +
+                                              q(ckpt) + " --out " + q(dir.file("o.json")), dir);
+  CHECK(other_options.status == 65);
+  CHECK(other_options.err.find("made with particles=128") != std::string::npos);
+  CHECK(other_options.err.find("this fit has particles=64") != std::string::npos);
 
   // Another log with the same ids: its first truck's data differ.
   const auto wrong = run_ssrfleet("fit " + q(other) + kFit + " --checkpoint " + q(ckpt) + " --out " + q(dir.file("w.json")), dir);

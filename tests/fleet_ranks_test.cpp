@@ -11,6 +11,10 @@
 #include "thread_ranks.hpp"
 
 #include "fleet/marginal_smc.hpp"
+#include "fleet/online_fit.hpp"
+#include "io/fit_checkpoint.hpp"
+#include "io/write_faults.hpp"
+#include "util/errors.hpp"
 #include "fleet/joint_sites.hpp"
 #include "fleet/simulator.hpp"
 #include "model/fleet_distribution.hpp"
@@ -147,4 +151,42 @@ TEST_CASE("a checkpoint of a fit on 3 ranks resumes on 2 ranks and on one proces
   restore_from(resumed_alone, checkpoint);
   absorb(resumed_alone, c.records, cut, n);
   CHECK(bytes_of(resumed_alone) == expected);
+}
+
+TEST_CASE("a fit checkpoint that a full disk stops throws on rank 0 after its part in the collectives, and the last one "
+          "stays whole",
+          "[marginal][ranks][checkpoint]") {
+  const TwoSites c(12, 5);
+  test::TempDir dir;
+  const std::string path = dir.file("fit.ckpt");
+  const std::string options_text = "particles=96";
+  std::mutex m;
+  std::map<int, std::string> outcome;
+  testing::run_on_ranks(2, [&](const util::Ranks& r) {
+    fleet::OnlineFitOptions o;
+    o.marginal = options(&r);
+    auto fit = fleet::make_online_fit(c.sites, o);
+    for (std::size_t i = 0; i < 14; ++i) fit->absorb(c.records[i]);
+    io::write_fit_checkpoint(path, *fit, r, options_text);
+    for (std::size_t i = 14; i < 18; ++i) fit->absorb(c.records[i]);
+    if (r.rank() == 0) io::arm_write_fault(1);  // rank 0's next write finds the disk full
+    std::string what = "written";
+    try {
+      io::write_fit_checkpoint(path, *fit, r, options_text);
+    } catch (const IoError& e) {
+      what = e.what();
+    }
+    if (r.rank() == 0) io::disarm_write_fault();
+    // The ranks are still in step: the next truck's collectives match.
+    fit->absorb(c.records[18]);
+    std::lock_guard lock(m);
+    outcome[r.rank()] = what;
+  });
+  CHECK(outcome[0].find("No space left on device") != std::string::npos);
+  CHECK(outcome[1] == "written");  // rank 1 writes nothing: it cannot fail
+  // The file is the first checkpoint, whole: it resumes at truck 14.
+  fleet::OnlineFitOptions o;
+  o.marginal = options(nullptr);
+  auto resumed = fleet::make_online_fit(c.sites, o);
+  CHECK(io::read_fit_checkpoint(path, *resumed, c.records, options_text) == 14);
 }

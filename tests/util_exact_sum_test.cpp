@@ -61,15 +61,26 @@ TEST_CASE("an exact sum is within its grid's rounding of the true sum", "[util][
   CHECK(c.value() == -std::ldexp(1.0, 41));
 }
 
-TEST_CASE("an exact sum with a -inf, NaN or vanishing term is -inf, and a term above 2^50 is refused", "[util][exact_sum]") {
-  for (double bad : {-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN(), -1e300}) {
+TEST_CASE("an exact sum with a -inf or vanishing term is -inf, with a NaN term NaN, and a term above 2^50 is refused",
+          "[util][exact_sum]") {
+  for (double bad : {-std::numeric_limits<double>::infinity(), -1e300}) {
     ExactSum s;
     s.add(1.5);
     s.add(bad);
     s.add(2.0);
-    CHECK(s.minus_infinity());
+    CHECK(s.settled());
     CHECK(s.value() == -std::numeric_limits<double>::infinity());
   }
+  // NaN wins over -inf, also across partial sums in word form: a numerical failure stays visible.
+  ExactSum nan, minus;
+  nan.add(std::numeric_limits<double>::quiet_NaN());
+  minus.add(-std::numeric_limits<double>::infinity());
+  std::uint64_t a[ExactSum::kWords], b[ExactSum::kWords];
+  nan.to_words(a);
+  minus.to_words(b);
+  ExactSum::add_words(a, b);
+  CHECK(nan.settled());
+  CHECK(std::isnan(ExactSum::from_words(b).value()));
   ExactSum big;
   CHECK_THROWS_AS(big.add(1e16), std::overflow_error);
   CHECK_THROWS_AS(big.add(std::numeric_limits<double>::infinity()), std::overflow_error);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,8 @@ double log_target(const Eigen::Ref<const Eigen::VectorXd>& observed, const Eigen
 TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::MarginalTarget& target,
                                     const fleet::HyperVector& theta, const smc::RngFactory& streams, int mh_steps,
                                     MarginalDrawStats* stats) {
+  // Every truck's table, in truck order: a target on one rank (diagnose runs on one process).
+  if (target.ranks().size() != 1) throw std::logic_error("draw_truck_latents: needs every truck's table (one rank)");
   const auto n = static_cast<Eigen::Index>(target.trucks());
   const int M = site.sensors();
   const double lo = site.lateral_min_m(), hi = site.lateral_max_m();

@@ -22,8 +22,6 @@ using detail::standard_normal;
 
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// The one engine MH block: the newest truck's latents.
-constexpr int kNewestBlock = 0;
 
 }  // namespace
 

@@ -139,27 +139,34 @@ void MarginalSmc::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t 
   }
   // Several ranks: a truck's table is on its own rank, which writes its record (sealed on its own,
   // so the bytes are those one process writes) and sends it to rank 0, which writes them all in
-  // truck order. Collective; what `out` receives on the other ranks is nothing.
-  std::ostringstream mine;
-  BinaryWriter blob(mine);
-  for (std::size_t i = begin; i < end; ++i) {
-    if (!ranks.owns(i)) continue;
-    std::ostringstream one;
-    BinaryWriter w(one);
-    record(w, i);
-    blob.text(one.str());
+  // truck order. In blocks of trucks, so rank 0 never holds more than a block of the others'
+  // tables. Collective; what `out` receives on the other ranks is nothing.
+  constexpr std::size_t kBlock = 4096;
+  for (std::size_t first = begin; first < end; first += kBlock) {
+    const std::size_t last = std::min(end, first + kBlock);
+    std::ostringstream mine;
+    BinaryWriter blob(mine);
+    for (std::size_t i = first; i < last; ++i) {
+      if (!ranks.owns(i)) continue;
+      std::ostringstream one;
+      BinaryWriter w(one);
+      record(w, i);
+      blob.text(one.str());
+    }
+    const std::vector<std::string> all = ranks.gather(mine.str(), 0);
+    if (ranks.rank() != 0) continue;
+    std::vector<std::istringstream> from;
+    std::vector<BinaryReader> readers;
+    from.reserve(all.size());
+    readers.reserve(all.size());
+    for (const std::string& s : all) {
+      from.emplace_back(s);
+      readers.emplace_back(from.back(), "a rank's truck records");
+    }
+    for (std::size_t i = first; i < last; ++i) {
+      out.sealed_bytes(readers[static_cast<std::size_t>(ranks.owner(i))].text("truck record", std::size_t{1} << 30));
+    }
   }
-  const std::vector<std::string> all = ranks.gather(mine.str(), 0);
-  if (ranks.rank() != 0) return;
-  std::vector<std::istringstream> from;
-  std::vector<BinaryReader> readers;
-  from.reserve(all.size());
-  readers.reserve(all.size());
-  for (const std::string& s : all) {
-    from.emplace_back(s);
-    readers.emplace_back(from.back(), "a rank's truck records");
-  }
-  for (std::size_t i = begin; i < end; ++i) out.sealed_bytes(readers[static_cast<std::size_t>(ranks.owner(i))].text("truck record", std::size_t{1} << 30));
 }
 
 void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
 #include "io/atomic_file.hpp"
@@ -13,18 +14,29 @@ namespace ssrfleet::io {
 namespace {
 namespace fs = std::filesystem;
 constexpr std::uint64_t kMagic = 0x4b54494646525353ULL;  // "SSRFFITK"
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 1;  // the head: magic, version, options, state; sealed
 // The fixed-size state is a few bytes per particle (about 80 kB at 1,024).
 constexpr std::size_t kMaxStateBytes = std::size_t{1} << 30;
 
-void write_checkpoint(std::ostream& os, const fleet::OnlineFit& fit) {
+std::uint64_t hash_of(const std::string& bytes) { return detail::fnv1a(detail::kFnvOffset, bytes.data(), bytes.size()); }
+
+// Collective: does every rank hold rank 0's `value`? (The same answer on every rank.)
+bool all_ranks_hold(const util::Ranks& ranks, std::uint64_t value) {
+  std::uint64_t root = value;
+  ranks.broadcast(&root, sizeof root, 0);
+  util::ExactSum differing;
+  differing.add(root == value ? 0.0 : 1.0);
+  ranks.sum(&differing, 1);
+  return differing.value() == 0.0;
+}
+
+void write_checkpoint(std::ostream& os, const fleet::OnlineFit& fit, const std::string& state,
+                      const std::string& options) {
   BinaryWriter out(os);
   out.value(kMagic);
   out.value(kVersion);
-  std::ostringstream state;
-  BinaryWriter s(state);
-  fit.save_state(s);
-  out.text(state.str());
+  out.text(options);
+  out.text(state);
   out.seal();
   fit.save_trucks(out, 0, static_cast<std::size_t>(fit.trucks_seen()));
 }
@@ -37,22 +49,66 @@ class NullBuffer final : public std::streambuf {
 };
 }  // namespace
 
-std::string fit_checkpoint_path(const std::string& dir, std::uint64_t seed) {
-  return (fs::path(dir) / ("fit." + std::to_string(seed) + ".ckpt")).string();
+std::string fit_checkpoint_path(const std::string& dir, std::uint64_t seed, const std::string& sites_fingerprint) {
+  std::ostringstream key;
+  key << std::hex << std::setw(16) << std::setfill('0') << hash_of(sites_fingerprint);
+  return (fs::path(dir) / ("fit." + std::to_string(seed) + "." + key.str() + ".ckpt")).string();
 }
 
-void write_fit_checkpoint(const std::string& path, const fleet::OnlineFit& fit, const util::Ranks& ranks) {
-  if (ranks.rank() == 0) {
-    write_file_atomically(path, [&](std::ostream& os) { write_checkpoint(os, fit); });
-  } else {
-    NullBuffer none;
-    std::ostream os(&none);
-    write_checkpoint(os, fit);
+void write_fit_checkpoint(const std::string& path, const fleet::OnlineFit& fit, const util::Ranks& ranks,
+                          const std::string& options) {
+  // The fixed-size state, on every rank (its passes are a sum over the ranks): the same bits on
+  // every rank, or the ranks have parted (a rank on another CPU whose exp() rounds otherwise would
+  // take other decisions, and their collectives would stop matching).
+  std::ostringstream state_bytes;
+  BinaryWriter s(state_bytes);
+  fit.save_state(s);
+  const std::string state = state_bytes.str();
+  if (!all_ranks_hold(ranks, hash_of(state))) {
+    throw NumericalError("the MPI ranks' particles differ at truck " + std::to_string(fit.trucks_seen()) +
+                         ": run every rank with the same ssrfleet-mpi binary on CPUs of one kind");
+  }
+  NullBuffer none;
+  std::ostream nowhere(&none);
+  if (ranks.rank() != 0) {
+    write_checkpoint(nowhere, fit, state, options);
+    return;
+  }
+  bool written = false;
+  try {
+    write_file_atomically(path, [&](std::ostream& os) {
+      written = true;
+      write_checkpoint(os, fit, state, options);
+    });
+  } catch (const IoError&) {
+    // The file could not even be opened: take part in the collectives all the same, so the other
+    // ranks are not left waiting, then report.
+    if (!written) write_checkpoint(nowhere, fit, state, options);
+    throw;
+  }
+}
+
+void check_ranks_agree(const util::Ranks& ranks, const std::vector<records::WimRecord>& records, std::size_t resumed) {
+  if (ranks.size() == 1) return;
+  std::ostringstream bytes;
+  BinaryWriter w(bytes);
+  w.value<std::uint64_t>(resumed);
+  for (const auto& r : records) {
+    w.text(r.truck_id);
+    w.value(r.site);
+    w.value(r.speed_mps);
+    w.value(r.sprung_mass_kg);
+    w.matrix(r.impact_factor);
+  }
+  if (!all_ranks_hold(ranks, hash_of(bytes.str()))) {
+    throw DataError("fit", 0, "ranks",
+                    "the MPI ranks read different logs or checkpoints (a file changed while they started, or they do not "
+                    "see the same files): run again once the files are still");
   }
 }
 
 std::size_t read_fit_checkpoint(const std::string& path, fleet::OnlineFit& fit,
-                                const std::vector<records::WimRecord>& records) {
+                                const std::vector<records::WimRecord>& records, const std::string& options) {
   std::error_code ec;
   if (!fs::exists(path, ec)) return 0;
   std::ifstream file(path, std::ios::binary);
@@ -64,8 +120,13 @@ std::size_t read_fit_checkpoint(const std::string& path, fleet::OnlineFit& fit,
     in.fail("version", "format version " + std::to_string(version) + ", this build reads " + std::to_string(kVersion) +
                            ": delete the file to fit from the start");
   }
+  const std::string made_with = in.text("options", 4096);
   std::istringstream state_bytes(in.text("state", kMaxStateBytes));
   in.check_seal("checkpoint head");
+  if (made_with != options) {
+    in.fail("options", "made with " + made_with + ", this fit has " + options +
+                           ": run with the checkpoint's options, or delete it to fit from the start");
+  }
   BinaryReader state(state_bytes, path);
   fit.restore_split(state, in);
   if (file.peek() != std::ifstream::traits_type::eof()) in.fail("end", "bytes after the last truck's record");

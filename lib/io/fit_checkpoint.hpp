@@ -23,16 +23,31 @@
 
 namespace ssrfleet::io {
 
-std::string fit_checkpoint_path(const std::string& dir, std::uint64_t seed);
+// DIR/fit.SEED.KEY.ckpt: SEED the class's seed, KEY a hash of the sites' fingerprint, so fits of
+// other sites (or another manifest) in the same directory keep their own files.
+std::string fit_checkpoint_path(const std::string& dir, std::uint64_t seed, const std::string& sites_fingerprint);
 
-// Collective over `ranks` (every rank calls it; rank 0 writes). IoError naming the file if it
-// cannot be written (the previous checkpoint, if any, stays whole).
-void write_fit_checkpoint(const std::string& path, const fleet::OnlineFit& fit, const util::Ranks& ranks);
+// What must match for a resume besides the sites and the seed (which the state checks itself): the
+// options that change the run from a given state, as text (e.g. "particles=1024 cess=0.5 ...").
+// A checkpoint made with others is refused, naming both.
+
+// Collective over `ranks` (every rank calls it; rank 0 writes). It first checks that every rank's
+// particles are the same bits as rank 0's (NumericalError otherwise: ranks on different CPUs or
+// builds). IoError naming the file if it cannot be written (the previous checkpoint stays whole),
+// thrown on rank 0 alone and only after its part in the collectives, so the ranks stay in step.
+void write_fit_checkpoint(const std::string& path, const fleet::OnlineFit& fit, const util::Ranks& ranks,
+                          const std::string& options);
 
 // If `path` exists: restores `fit` (new, of the same sites and seed) from it and returns the trucks it
-// holds, after checking them against the records' first ones (id, site, speed, mass and impact
-// factors; a DataError naming the file and the truck if the log changed since). 0 if there is no file.
+// holds, after checking its options and its trucks against the records' first ones (id, site,
+// speed, mass and impact factors; a DataError naming the file and the truck if the log changed
+// since). 0 if there is no file.
 std::size_t read_fit_checkpoint(const std::string& path, fleet::OnlineFit& fit,
-                                const std::vector<records::WimRecord>& records);
+                                const std::vector<records::WimRecord>& records, const std::string& options);
+
+// Collective: throws the same DataError on every rank unless every rank read the same records and
+// resumed from the same truck (a log appended to, or a checkpoint written, while the ranks started
+// would otherwise split the ranks' work into different runs).
+void check_ranks_agree(const util::Ranks& ranks, const std::vector<records::WimRecord>& records, std::size_t resumed);
 
 }  // namespace ssrfleet::io

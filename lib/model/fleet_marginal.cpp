@@ -123,7 +123,7 @@ void FleetMarginal::add_log_likelihoods(const TableStore& store, std::size_t end
     while (last < end && offset[last] - offset[first] < kBlockEntries) ++last;
     for (std::size_t p = 0; p < count; ++p) {
       util::ExactSum& s = sums[p];
-      for (std::size_t i = first; i < last && !s.minus_infinity(); ++i) s.add(log_likelihood(store.view(i), terms[p]));
+      for (std::size_t i = first; i < last && !s.settled(); ++i) s.add(log_likelihood(store.view(i), terms[p]));
     }
     first = last;
   }

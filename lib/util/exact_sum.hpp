@@ -5,16 +5,18 @@
 // ranks each sum their own trucks and the partial sums are added in whatever order the network
 // delivers them, a seed gives the same bits (README "Scale-out on MPI").
 //
-// The grid, 2^-48 ≈ 3.6e-15, is finer than a double's own spacing for any |ℓ| above 1/64, and the
-// rounding error per term (at most 1.8e-15) is nine orders below the single-precision node sums'
-// own (1.6e-6 nats per truck). Range: a term's |x| must stay below 2^50 ≈ 1.1e15; a term below
-// -2^50 is a density of zero and makes the sum -inf (as -inf and NaN terms do); a term above +2^50
-// is a bug (a log-likelihood that large is impossible) and throws. With at most 2^28 terms (268
-// million trucks) the 128-bit total cannot overflow.
+// The grid, 2^-48 ≈ 3.6e-15, is finer than a double's own spacing for any |ℓ| of 16 or more, and
+// the rounding error per term (at most 1.8e-15) is nine orders below the single-precision node
+// sums' own (1.6e-6 nats per truck). Range: a term's |x| must stay below 2^50 ≈ 1.1e15; a term
+// below -2^50 is a density of zero and makes the sum -inf (as a -inf term does); a NaN term makes
+// it NaN (a numerical failure the caller must see, not a particle quietly dropped); a term above
+// +2^50 is a bug (a log-likelihood that large is impossible) and throws. With at most 2^28 terms
+// (268 million trucks) the 128-bit total cannot overflow.
 #pragma once
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 
 namespace ssrfleet::util {
@@ -26,7 +28,11 @@ class ExactSum {
   static constexpr double kScale = 0x1p48;  // 2^kFractionBits
 
   void add(double x) {
-    if (!(x >= -kMaxTerm)) {  // -inf, NaN, or a density of zero
+    if (std::isnan(x)) {
+      ++nans_;
+      return;
+    }
+    if (x < -kMaxTerm) {  // -inf, or a density of zero
       ++minus_infinities_;
       return;
     }
@@ -38,27 +44,32 @@ class ExactSum {
   void add(const ExactSum& other) {
     total_ += other.total_;
     minus_infinities_ += other.minus_infinities_;
+    nans_ += other.nans_;
   }
-  bool minus_infinity() const { return minus_infinities_ != 0; }
-  // The sum, rounded once to the nearest double (-inf if any term was).
+  // No term will change the value any more (-inf or NaN): a caller may skip the rest.
+  bool settled() const { return minus_infinities_ != 0 || nans_ != 0; }
+  // The sum, rounded once to the nearest double (NaN if any term was; else -inf if any term was).
   double value() const {
-    if (minus_infinity()) return -INFINITY;
+    if (nans_ != 0) return std::numeric_limits<double>::quiet_NaN();
+    if (minus_infinities_ != 0) return -std::numeric_limits<double>::infinity();
     return static_cast<double>(total_) / kScale;
   }
 
-  // The raw state as three 64-bit words (the total's low and high halves, the count of -inf
-  // terms): what an MPI reduction sends and adds (add_words), word for word.
-  static constexpr int kWords = 3;
+  // The raw state as four 64-bit words (the total's low and high halves, the counts of -inf and of
+  // NaN terms): what an MPI reduction sends and adds (add_words), word for word.
+  static constexpr int kWords = 4;
   void to_words(std::uint64_t* w) const {
     const auto u = static_cast<UInt>(total_);
     w[0] = static_cast<std::uint64_t>(u);
     w[1] = static_cast<std::uint64_t>(u >> 64);
     w[2] = minus_infinities_;
+    w[3] = nans_;
   }
   static ExactSum from_words(const std::uint64_t* w) {
     ExactSum s;
     s.total_ = static_cast<Int>((static_cast<UInt>(w[1]) << 64) | w[0]);
     s.minus_infinities_ = w[2];
+    s.nans_ = w[3];
     return s;
   }
   // into += from, for sums in word form (two's complement: the carry of the low word goes up).
@@ -67,13 +78,14 @@ class ExactSum {
     into[1] += from[1] + (low < from[0] ? 1u : 0u);
     into[0] = low;
     into[2] += from[2];
+    into[3] += from[3];
   }
 
  private:
   __extension__ using Int = __int128;
   __extension__ using UInt = unsigned __int128;
   Int total_ = 0;
-  std::uint64_t minus_infinities_ = 0;
+  std::uint64_t minus_infinities_ = 0, nans_ = 0;
 };
 
 }  // namespace ssrfleet::util

@@ -44,12 +44,6 @@ class Ranks {
   // Which rank keeps item i (a truck, in arrival order).
   int owner(std::uint64_t i) const { return static_cast<int>(i % static_cast<std::uint64_t>(size())); }
   bool owns(std::uint64_t i) const { return owner(i) == rank(); }
-  // How many of the items [0, end) this rank keeps (its own are kept in arrival order, so these
-  // are the first owned_before(end) of its local store).
-  std::uint64_t owned_before(std::uint64_t end) const {
-    const auto r = static_cast<std::uint64_t>(rank()), s = static_cast<std::uint64_t>(size());
-    return end > r ? (end - r - 1) / s + 1 : 0;
-  }
 };
 
 class SingleRank final : public Ranks {
