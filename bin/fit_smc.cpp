@@ -42,7 +42,7 @@ void FitFlags::add_to(po::options_description& desc) {
       ("window", po::value(&window)->default_value(window),
        "latent core: keep and move only the last W trucks' latents per particle; older ones as sufficient statistics (0 = exact)")
       ("checkpoint", po::value(&checkpoint_dir),
-       "a directory for the fit's checkpoints (marginal core): a fit that stopped (a killed job, a lost MPI rank) "
+       "a directory for the fit's checkpoints (marginal core; made if missing): a fit that stopped (a killed job, a lost MPI rank) "
        "resumes from its last one with the same result, also on another number of ranks; a log grown since "
        "goes on from it")
       ("checkpoint-every", po::value(&checkpoint_every_s)->default_value(checkpoint_every_s, "600"),
@@ -91,9 +91,14 @@ fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t 
     }
     if (!(flags.checkpoint_every_s > 0.0)) throw UsageError("--checkpoint-every must be > 0 seconds");
     if (flags.checkpoint_every_trucks < 0) throw UsageError("--checkpoint-every-trucks must be >= 0");
+    // Made if missing (its parent must exist: a mistyped path should not grow a tree of folders).
     std::error_code ec;
+    std::filesystem::create_directory(flags.checkpoint_dir, ec);
     if (!std::filesystem::is_directory(flags.checkpoint_dir, ec)) {
-      throw MissingInputError("--checkpoint '" + flags.checkpoint_dir + "' is not a directory (create it first)");
+      if (std::filesystem::exists(flags.checkpoint_dir, ec)) {
+        throw UsageError("--checkpoint '" + flags.checkpoint_dir + "' is a file, not a directory");
+      }
+      throw MissingInputError("--checkpoint '" + flags.checkpoint_dir + "': cannot make the directory (does its parent exist?)");
     }
   }
   if (flags.window < 0) throw UsageError("--window must be >= 0");

@@ -123,7 +123,12 @@ TEST_CASE("fit --checkpoint refuses a checkpoint of another log, a damaged one, 
   CHECK(cut.err.find(file) != std::string::npos);
   CHECK_FALSE(std::filesystem::exists(dir.file("d.json")));
 
-  CHECK(run_ssrfleet("fit " + q(log) + kFit + " --checkpoint " + q(dir.file("none")), dir).status == 66);
+  CHECK(run_ssrfleet("fit " + q(log) + kFit + " --checkpoint " + q(dir.file("no/such/folder")), dir).status == 66);
+  CHECK(run_ssrfleet("fit " + q(log) + kFit + " --checkpoint " + q(log), dir).status == 64);  // a file
+  // A missing folder whose parent exists is made.
+  CHECK(run_ssrfleet("fit " + q(log) + kFit + " --checkpoint " + q(dir.file("new")) + " --out " + q(dir.file("n.json")), dir)
+            .status == 0);
+  CHECK_FALSE(checkpoint_in(dir.file("new")).empty());
   CHECK(run_ssrfleet("fit " + q(log) + kFit + " --checkpoint " + q(ckpt) + " --checkpoint-every 0", dir).status == 64);
   CHECK(run_ssrfleet("fit " + q(log) + kFit + " --checkpoint " + q(ckpt) + " --method mcmc", dir).status == 64);
   CHECK(run_ssrfleet("fit " + q(log) + kFit + " --checkpoint " + q(ckpt) + " --core latent", dir).status == 64);
