@@ -1,6 +1,7 @@
 #include "mpi_ranks.hpp"
 
 #include <algorithm>
+#include <climits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -106,6 +107,22 @@ std::vector<std::string> MpiRanks::gather(const std::string& mine, int root) con
     }
   }
   return all;
+}
+
+void MpiRanks::share_slices(double* values, std::size_t count) const {
+  if (size_ == 1 || count == 0) return;
+  if (count > static_cast<std::size_t>(INT_MAX)) throw std::runtime_error("MPI: share_slices of more than INT_MAX values");
+  std::vector<int> counts(static_cast<std::size_t>(size_)), offsets(static_cast<std::size_t>(size_));
+  for (int r = 0; r < size_; ++r) {
+    const auto [first, last] = slice_of(r, count);
+    counts[static_cast<std::size_t>(r)] = static_cast<int>(last - first);
+    offsets[static_cast<std::size_t>(r)] = static_cast<int>(first);
+  }
+  check(MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, values, counts.data(), offsets.data(), MPI_DOUBLE,
+                       MPI_COMM_WORLD),
+        "MPI_Allgatherv of the newest truck's likelihoods");
+  ++traffic_.calls;
+  traffic_.bytes += static_cast<std::uint64_t>(counts[static_cast<std::size_t>(rank_)]) * sizeof(double);
 }
 
 }  // namespace ssrfleet::mpi

@@ -22,6 +22,7 @@ class MpiRanks final : public util::Ranks {
   void sum(util::ExactSum* sums, std::size_t count) const override;
   void broadcast(void* data, std::size_t bytes, int root) const override;
   std::vector<std::string> gather(const std::string& mine, int root) const override;
+  void share_slices(double* values, std::size_t count) const override;
   Traffic traffic() const override { return traffic_; }
 
  private:

@@ -17,11 +17,14 @@ namespace ssrfleet::testing {
 class ThreadRanks final : public util::Ranks {
  public:
   struct Shared {
-    explicit Shared(int n) : size(n), sync(n), sums(static_cast<std::size_t>(n)), texts(static_cast<std::size_t>(n)) {}
+    explicit Shared(int n)
+        : size(n), sync(n), sums(static_cast<std::size_t>(n)), texts(static_cast<std::size_t>(n)),
+          slices(static_cast<std::size_t>(n)) {}
     int size;
     std::barrier<> sync;
     std::vector<std::vector<util::ExactSum>> sums;
     std::vector<const std::string*> texts;
+    std::vector<const double*> slices;
     const void* broadcast = nullptr;
   };
   ThreadRanks(Shared& shared, int rank) : shared_(shared), rank_(rank) {}
@@ -56,6 +59,17 @@ class ThreadRanks final : public util::Ranks {
     shared_.sync.arrive_and_wait();
     ++traffic_.calls;
     return all;
+  }
+  void share_slices(double* values, std::size_t count) const override {
+    shared_.slices[static_cast<std::size_t>(rank_)] = values;
+    shared_.sync.arrive_and_wait();
+    for (int r = 0; r < size(); ++r) {
+      if (r == rank_) continue;
+      const auto [first, last] = slice_of(r, count);
+      std::memcpy(values + first, shared_.slices[static_cast<std::size_t>(r)] + first, (last - first) * sizeof(double));
+    }
+    shared_.sync.arrive_and_wait();
+    ++traffic_.calls;
   }
   Traffic traffic() const override { return traffic_; }
 

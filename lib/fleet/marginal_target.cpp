@@ -6,7 +6,9 @@
 #include <limits>
 #include <numeric>
 #include <sstream>
+#include <type_traits>
 
+#include "util/binary_io.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::fleet {
@@ -27,6 +29,44 @@ class ScopeTimer {
 };
 
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+
+// A table's nodes and u_ref as bytes, for the ranks that did not build it (the table's other
+// fields are its builder's diagnostics).
+std::string table_bytes(const model::TruckTable& t) {
+  std::ostringstream os;
+  BinaryWriter w(os);
+  w.value<std::uint64_t>(t.nodes());
+  w.value(t.u_ref);
+  auto put = [&](const auto& v) {
+    for (const auto& x : v) w.value(x);
+  };
+  put(t.k_index);
+  put(t.kt_index);
+  put(t.c);
+  put(t.m);
+  put(t.b);
+  put(t.z_mean_m);
+  put(t.z_var_m2);
+  return os.str();
+}
+
+void read_table_bytes(const std::string& bytes, model::TruckTable& t) {
+  std::istringstream is(bytes);
+  BinaryReader r(is, "the newest truck's table");
+  const auto nodes = r.value<std::uint64_t>("nodes");
+  t.u_ref = r.value<double>("u_ref");
+  auto get = [&](auto& v) {
+    v.resize(nodes);
+    for (auto& x : v) x = r.template value<std::remove_reference_t<decltype(x)>>("node");
+  };
+  get(t.k_index);
+  get(t.kt_index);
+  get(t.c);
+  get(t.m);
+  get(t.b);
+  get(t.z_mean_m);
+  get(t.z_var_m2);
+}
 
 // The moves' coordinates: the four scale parameters on the log scale, where the early posterior's
 // funnels (a fleet sd near zero against a broad one) become walkable and a random walk scaled on
@@ -324,10 +364,22 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
       double lateral_error_nats;
     } shared{fit, table.lateral_error_nats};
     static_assert(std::is_trivially_copyable_v<FromOwner> && sizeof(FromOwner) == sizeof(model::TruckFit) + sizeof(double));
-    ranks_->broadcast(&shared, sizeof shared, ranks_->owner(static_cast<std::uint64_t>(n)));
+    const int owner = ranks_->owner(static_cast<std::uint64_t>(n));
+    ranks_->broadcast(&shared, sizeof shared, owner);
     fit = shared.fit;
     table.lateral_error_nats = shared.lateral_error_nats;
+    // Its table too, for the truck stage's slices of particles (one process: nothing to send).
+    if (ranks_->size() > 1) {
+      std::string bytes = mine ? table_bytes(table) : std::string();
+      std::uint64_t size = bytes.size();
+      ranks_->broadcast(&size, sizeof size, owner);
+      bytes.resize(size);
+      ranks_->broadcast(bytes.data(), bytes.size(), owner);
+      if (!mine) read_table_bytes(bytes, table);
+    }
   }
+  newest_ = model::TableStore{};
+  newest_.append(table, site_index);
   if (std::isfinite(table.lateral_error_nats)) {
     ++lateral_checked_;
     lateral_error_abs_sum_ += std::abs(table.lateral_error_nats);
@@ -427,21 +479,22 @@ void MarginalTarget::finish_stage() {
 void MarginalTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
                                  const smc::ParallelFor& parallel) {
   const Eigen::Index P = options_.particles;
-  const std::size_t n = speed_mps_.size();
-  // The newest truck's rank computes its ℓ for every particle (truck stage); every rank sums its
-  // own trucks (correction); then the ranks exchange (outside the threads).
-  const int newest = n > 0 ? ranks_->owner(n - 1) : 0;
+  // Each rank computes the newest truck's ℓ for its slice of the particles (truck stage), or sums
+  // its own trucks (correction); then the ranks exchange (outside the threads).
+  // Plain names, not a structured binding: clang 14 (the fuzz build's) cannot capture one.
+  const std::pair<std::size_t, std::size_t> slice = ranks_->slice(static_cast<std::size_t>(P));
+  const std::size_t slice_begin = slice.first, slice_end = slice.second;
   std::vector<util::ExactSum> sums(mode_ == Mode::kCorrection ? static_cast<std::size_t>(P) : 0);
   parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index p = begin; p < end; ++p) {
       const HyperVector th = theta_of(p);
+      const auto u = static_cast<std::size_t>(p);
       switch (mode_) {
         case Mode::kIdle:
           inc_[p] = 0.0;
           break;
         case Mode::kTruck:
-          inc_[p] = newest == ranks_->rank() ? marginal_.log_likelihood(store_.view(store_.trucks() - 1), marginal_.prepare(th))
-                                             : 0.0;
+          inc_[p] = u >= slice_begin && u < slice_end ? marginal_.log_likelihood(newest_.view(0), marginal_.prepare(th)) : 0.0;
           break;
         case Mode::kCorrection: {
           const model::ThetaTerms terms = marginal_.prepare(th);
@@ -451,7 +504,7 @@ void MarginalTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref
       }
     }
   });
-  if (mode_ == Mode::kTruck) ranks_->broadcast(inc_.data(), static_cast<std::size_t>(P) * sizeof(double), newest);
+  if (mode_ == Mode::kTruck) ranks_->share_slices(inc_.data(), static_cast<std::size_t>(P));
   if (mode_ == Mode::kCorrection) {
     ranks_->sum(sums.data(), sums.size());
     for (Eigen::Index p = 0; p < P; ++p) inc_[p] = sums[static_cast<std::size_t>(p)].value() - base_sum_[p];
@@ -480,10 +533,11 @@ void MarginalTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen:
   const std::size_t n = speed_mps_.size();
   const std::size_t local = store_.trucks();
   const bool newest_mine = n > 0 && ranks_->owns(n - 1);
-  const int newest = n > 0 ? ranks_->owner(n - 1) : 0;
+  const std::pair<std::size_t, std::size_t> slice = ranks_->slice(count);
+  const std::size_t slice_begin = slice.first, slice_end = slice.second;
   // Per particle: the log prior (with the Jacobian), the exact sum over this rank's trucks in log γ
   // (the old tables' in a correction), the new tables' sum (correction) and the newest truck's ℓ
-  // (truck stage, on its rank). Sums over the ranks follow, outside the threads.
+  // (truck stage, this rank's slice of the particles). The exchange follows, outside the threads.
   std::vector<double> lp(count), inc(count, 0.0);
   std::vector<util::ExactSum> sums(mode_ == Mode::kCorrection ? 2 * count : count);
   parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
@@ -507,9 +561,10 @@ void MarginalTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen:
         break;
       case Mode::kTruck:
         marginal_.add_log_likelihoods(store_, newest_mine ? local - 1 : local, terms.data(), chunk, base);
-        if (newest_mine)
-          for (std::size_t c = 0; c < chunk; ++c)
-            if (lp[first + c] > kNegInf) inc[first + c] = marginal_.log_likelihood(store_.view(local - 1), terms[c]);
+        for (std::size_t c = 0; c < chunk; ++c) {
+          const std::size_t p = first + c;
+          if (p >= slice_begin && p < slice_end && lp[p] > kNegInf) inc[p] = marginal_.log_likelihood(newest_.view(0), terms[c]);
+        }
         break;
       case Mode::kCorrection:
         old_terms.resize(chunk);
@@ -522,7 +577,7 @@ void MarginalTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen:
     }
   });
   ranks_->sum(sums.data(), sums.size());
-  if (mode_ == Mode::kTruck) ranks_->broadcast(inc.data(), count * sizeof(double), newest);
+  if (mode_ == Mode::kTruck) ranks_->share_slices(inc.data(), count);
   for (std::size_t c = 0; c < count; ++c) {
     const double base = sums[c].value();
     if (mode_ == Mode::kCorrection) inc[c] = sums[count + c].value() - base;

@@ -105,7 +105,8 @@ class MarginalTarget final : public smc::TemperedModel {
     // The processes the fit runs on (util/ranks.hpp; null: this one alone). Every rank holds the
     // same particles; truck i's table is built and kept by rank i % R alone, which sums its own
     // trucks' ℓ_i for every particle, and the exact partial sums are added over the ranks, so a
-    // seed gives the same bits for any R. The ranks must call every member in the same order.
+    // seed gives the same bits for any R. The newest truck's table goes to every rank, and each
+    // computes its ℓ for a slice of the particles. The ranks must call every member in the same order.
     const util::Ranks* ranks = nullptr;
   };
 
@@ -243,6 +244,10 @@ class MarginalTarget final : public smc::TemperedModel {
   TableSettings settings_;
   model::FleetMarginal marginal_;
   model::TableStore store_;
+  // The newest truck's table, on every rank (its rank sends it): in a truck stage each rank computes
+  // that truck's ℓ for its slice of the particles (util::Ranks::slice), so the stage's one serial
+  // piece of work is shared too.
+  model::TableStore newest_;
   // During a correction stage: the tables and settings being replaced.
   std::optional<model::TableStore> old_store_;
   std::optional<model::FleetMarginal> old_marginal_;

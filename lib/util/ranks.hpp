@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "util/exact_sum.hpp"
@@ -33,6 +34,9 @@ class Ranks {
   virtual void broadcast(void* data, std::size_t bytes, int root) const = 0;
   // Collective: every rank's `mine`, in rank order, at rank `root` (empty elsewhere).
   virtual std::vector<std::string> gather(const std::string& mine, int root) const = 0;
+  // Collective: `values` holds `count` numbers of which this rank has filled its own slice
+  // (slice(count)); afterwards every rank holds every rank's slice.
+  virtual void share_slices(double* values, std::size_t count) const = 0;
 
   // What this rank has sent so far (for the scaling benchmark): collective calls and payload bytes.
   struct Traffic {
@@ -44,6 +48,13 @@ class Ranks {
   // Which rank keeps item i (a truck, in arrival order).
   int owner(std::uint64_t i) const { return static_cast<int>(i % static_cast<std::uint64_t>(size())); }
   bool owns(std::uint64_t i) const { return owner(i) == rank(); }
+  // This rank's share [first, second) of `count` items cut into contiguous slices in rank order
+  // (the particles whose newest-truck likelihood this rank computes).
+  std::pair<std::size_t, std::size_t> slice(std::size_t count) const { return slice_of(rank(), count); }
+  std::pair<std::size_t, std::size_t> slice_of(int r, std::size_t count) const {
+    const auto s = static_cast<std::size_t>(size()), k = static_cast<std::size_t>(r);
+    return {count * k / s, count * (k + 1) / s};
+  }
 };
 
 class SingleRank final : public Ranks {
@@ -53,6 +64,7 @@ class SingleRank final : public Ranks {
   void sum(ExactSum*, std::size_t) const override {}
   void broadcast(void*, std::size_t, int) const override {}
   std::vector<std::string> gather(const std::string& mine, int) const override { return {mine}; }
+  void share_slices(double*, std::size_t) const override {}
   Traffic traffic() const override { return {}; }
 };
 
