@@ -133,8 +133,8 @@ fleet::PosteriorCloud fit_smc_on(const std::vector<const site::Site*>& sites,
                                  : io::fit_checkpoint_path(flags.checkpoint_dir, seed, fleet::sites_fingerprint(sites));
   // What a checkpoint must have been made with, besides the sites and the seed.
   std::ostringstream checkpoint_options;
-  checkpoint_options << std::setprecision(17) << "particles=" << o.sampler().particles
-                     << " cess=" << o.sampler().tempering.cess_target << " max_sweeps=" << o.sampler().schedule.max_sweeps;
+  checkpoint_options << "particles=" << o.sampler().particles << " cess=" << shortest_text(o.sampler().tempering.cess_target)
+                     << " max_sweeps=" << o.sampler().schedule.max_sweeps;
   std::size_t resumed = 0;
   if (!checkpoint.empty()) {
     resumed = io::read_fit_checkpoint(checkpoint, *smc, records, checkpoint_options.str());

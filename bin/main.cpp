@@ -132,6 +132,8 @@ int main(int argc, char* argv[]) {
   // shows its message (it names the rank) before the abort.
   if (status != 0 && ssrfleet::cli::process_ranks().size() > 1) {
     if (!speaks) std::cerr << quiet_err.str();
+    std::cout.flush();  // MPI_Abort does not flush
+    std::cerr.flush();
     ssrfleet::cli::abort_process_ranks(status);
   }
   ssrfleet::cli::stop_process_ranks();

@@ -118,7 +118,7 @@ void MpiRanks::share_slices(double* values, std::size_t count) const {
     counts[static_cast<std::size_t>(r)] = static_cast<int>(last - first);
     offsets[static_cast<std::size_t>(r)] = static_cast<int>(first);
   }
-  check(MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, values, counts.data(), offsets.data(), MPI_DOUBLE,
+  check(MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DOUBLE, values, counts.data(), offsets.data(), MPI_DOUBLE,
                        MPI_COMM_WORLD),
         "MPI_Allgatherv of the newest truck's likelihoods");
   ++traffic_.calls;

@@ -14,7 +14,9 @@ namespace ssrfleet::io {
 namespace {
 namespace fs = std::filesystem;
 constexpr std::uint64_t kMagic = 0x4b54494646525353ULL;  // "SSRFFITK"
-constexpr std::uint32_t kVersion = 1;  // the head: magic, version, options, state; sealed
+// Version 2 adds the options to the head (magic, version, options, state; sealed); version 1 (the
+// first build with checkpoints, for a few commits) had no options and is refused by its version.
+constexpr std::uint32_t kVersion = 2;
 // The fixed-size state is a few bytes per particle (about 80 kB at 1,024).
 constexpr std::size_t kMaxStateBytes = std::size_t{1} << 30;
 

@@ -89,7 +89,7 @@ class FleetMarginal {
   void sum_log_likelihood(const TableStore& store, std::size_t end, const ThetaTerms* terms, std::size_t count,
                           double* sums) const;
   // The same, added to exact partial sums (sums[p] += Σ_{i<end} ℓ_i(θ_p)); one already settled
-  // (-inf or NaN) is skipped.
+  // (a -inf term) is skipped.
   void add_log_likelihoods(const TableStore& store, std::size_t end, const ThetaTerms* terms, std::size_t count,
                            util::ExactSum* sums) const;
   // Table entries per block of trucks: 16,384 entries × 36 bytes ≈ 590 kB, within a 1 MB L2.

@@ -9,7 +9,9 @@
 // the rounding error per term (at most 1.8e-15) is nine orders below the single-precision node
 // sums' own (1.6e-6 nats per truck). Range: a term's |x| must stay below 2^50 ≈ 1.1e15; a term
 // below -2^50 is a density of zero and makes the sum -inf (as a -inf term does); a NaN term makes
-// it NaN (a numerical failure the caller must see, not a particle quietly dropped); a term above
+// it NaN unless a term is -inf (a numerical failure the caller must see, not a particle quietly
+// dropped; -inf wins, so a sum that stops at its first -inf term has the bits of one that does
+// not, whatever the order of the terms or their split between ranks); a term above
 // +2^50 is a bug (a log-likelihood that large is impossible) and throws. With at most 2^28 terms
 // (268 million trucks) the 128-bit total cannot overflow.
 #pragma once
@@ -46,12 +48,12 @@ class ExactSum {
     minus_infinities_ += other.minus_infinities_;
     nans_ += other.nans_;
   }
-  // No term will change the value any more (-inf or NaN): a caller may skip the rest.
-  bool settled() const { return minus_infinities_ != 0 || nans_ != 0; }
-  // The sum, rounded once to the nearest double (NaN if any term was; else -inf if any term was).
+  // No term will change the value any more (a term was -inf): a caller may skip the rest.
+  bool settled() const { return minus_infinities_ != 0; }
+  // The sum, rounded once to the nearest double: -inf if any term was, else NaN if any term was.
   double value() const {
-    if (nans_ != 0) return std::numeric_limits<double>::quiet_NaN();
     if (minus_infinities_ != 0) return -std::numeric_limits<double>::infinity();
+    if (nans_ != 0) return std::numeric_limits<double>::quiet_NaN();
     return static_cast<double>(total_) / kScale;
   }
 
