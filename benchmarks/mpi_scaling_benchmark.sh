@@ -98,16 +98,26 @@ records=$((3 * trucks))
   # Network: HDR InfiniBand, beta = 25 GB/s (200 Gb/s per port) and an MPI latency alpha = 2 us
   # per step (the ConnectX-6 adapter's quoted sub-0.6 us, times 3 for switches and the MPI stack:
   # an assumption, not a measurement).
-  line=$(grep -h "rank(s) x" "one.$reps.err" | tail -1)
+  # A truck's own stage splits too (each rank its slice of the particles) but for its reweighting:
+  # with p1 its time on one thread and p2 on 2 ranks, p2 = s + (p1 - s) / 2 gives the serial part
+  # s = 2 p2 - p1 (an overestimate: p2 includes the collectives).
+  line=$(grep -h "rank(s) x" "ranks.$reps.err" | tail -1)
   field() { sed -nE "s/$1/\\1/p" <<< "$line"; }
+  p2=$(field '.* s, ([0-9.]+) ms each.*')
+  line=$(grep -h "rank(s) x" "one.$reps.err" | tail -1)
   total_one=$(field '.*thread\(s\): ([0-9.]+) s, of which.*')
-  par=$(calc "($(field '.*of which tables ([0-9.]+) s.*') + $(field '.*sweeps in all ([0-9.]+) s.*') + $(field '.*final sweeps ([0-9.]+) s.*')) / $records")
+  p1=$(field '.* s, ([0-9.]+) ms each.*')
+  plain_total=$(field '.*without moves ([0-9.]+) s,.*')
+  stage_serial=$(calc "(2 * $p2 - $p1 > 0 ? 2 * $p2 - $p1 : 0) / 1000")
+  par=$(calc "($(field '.*of which tables ([0-9.]+) s.*') + $(field '.*sweeps in all ([0-9.]+) s.*') + $(field '.*final sweeps ([0-9.]+) s.*') + $plain_total) / $records - $stage_serial")
   ser=$(calc "$total_one / $records - $par")
   echo
   echo "## Projection: a 200-site, 20-million-record year (one thread per rank)"
   echo
-  printf 'Per record, from the one-thread run: %.2f ms that split over the ranks, %.3f ms that do not.\n' \
+  printf 'Per record, from the one-thread run: %.2f ms that split over the ranks, %.3f ms that do not\n' \
     "$(calc "1000 * $par")" "$(calc "1000 * $ser")"
+  printf '(of which a truck stage'"'"'s serial part, %.3f ms = 2 x %s - %s ms, from its times on 2 ranks and on one thread).\n' \
+    "$(calc "1000 * $stage_serial")" "$p2" "$p1"
   echo "Collectives at R ranks: calls and bytes per record as rank 0 sent them at 2 ranks, each a tree of"
   echo "ceil(log2 R) steps there and back; HDR InfiniBand, 25 GB/s, 2 us per step (an assumption)."
   echo
