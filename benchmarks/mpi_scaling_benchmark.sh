@@ -54,6 +54,8 @@ for ((r = 1; r <= reps; ++r)); do
   cmp -s one.json ranks.json || { echo "2 ranks gave another posterior" >&2; exit 1; }
 done
 load_end=$(cut -d' ' -f1 /proc/loadavg)
+# One figure of a variant's last summary line from fit: field VARIANT 'REGEX with one (group)'.
+field() { grep -h "rank(s) x" "$1.$reps.err" | tail -1 | sed -nE "s/$2/\1/p"; }
 median() { printf '%s\n' "$@" | sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}'; }
 records=$((3 * trucks))
 {
@@ -73,15 +75,13 @@ records=$((3 * trucks))
     for ((r = 1; r <= reps; ++r)); do times+=("${wall[$variant.$r]}"); done
     m=$(median "${times[@]}")
     [[ -n $base ]] || base=$m
-    line=$(grep -h "rank(s) x" "$variant.$reps.err" | tail -1)
-    field() { sed -nE "s/$1/\1/p" <<< "$line"; }
-    tables=$(field '.*of which tables ([0-9.]+) s.*')
-    moved=$(field '.*sweeps in all ([0-9.]+) s.*')
-    final=$(field '.*final sweeps ([0-9.]+) s.*')
-    plain=$(field '.* s, ([0-9.]+) ms each.*')
-    per_rank=$(field '.*tables per rank ([0-9.]+ to [0-9.]+) s.*')
-    bytes=$(field '.*rank 0 sent ([0-9]+) bytes.*')
-    calls=$(field '.*bytes in ([0-9]+) collectives.*')
+    tables=$(field "$variant" '.*of which tables ([0-9.]+) s.*')
+    moved=$(field "$variant" '.*sweeps in all ([0-9.]+) s.*')
+    final=$(field "$variant" '.*final sweeps ([0-9.]+) s.*')
+    plain=$(field "$variant" '.* s, ([0-9.]+) ms each.*')
+    per_rank=$(field "$variant" '.*tables per rank ([0-9.]+ to [0-9.]+) s.*')
+    bytes=$(field "$variant" '.*rank 0 sent ([0-9]+) bytes.*')
+    calls=$(field "$variant" '.*bytes in ([0-9]+) collectives.*')
     printf '| %s | %.1f | %.2f | %.2f | %s | %s | %s | %s | %s | %s | %s |\n' "$variant" "$m" "$(calc "$base / $m")" \
       "$(calc "1000 * $m / $records")" "$tables" "${per_rank:--}" "$moved" "$final" "$plain" "${bytes:--}" "${calls:--}"
     if [[ $variant == ranks ]]; then
@@ -91,8 +91,8 @@ records=$((3 * trucks))
     fi
   done
   # The projection (README "Scale-out on MPI"), from the figures above: per record, the work that
-  # splits over R ranks (tables, stages with moves, final sweeps of the one-thread run), the work
-  # that does not (the rest of that run: each truck's own stage and bookkeeping), and the
+  # splits over R ranks (tables, stages with moves, final sweeps, each truck's own stage but its
+  # reweighting, of the one-thread run), the work that does not (the rest of that run), and the
   # collectives at R ranks, each costed as a tree of ceil(log2 R) steps there and back:
   # 2 ceil(log2 R) (alpha + payload / beta), with rank 0's calls and bytes per record at 2 ranks.
   # Network: HDR InfiniBand, beta = 25 GB/s (200 Gb/s per port) and an MPI latency alpha = 2 us
@@ -101,15 +101,13 @@ records=$((3 * trucks))
   # A truck's own stage splits too (each rank its slice of the particles) but for its reweighting:
   # with p1 its time on one thread and p2 on 2 ranks, p2 = s + (p1 - s) / 2 gives the serial part
   # s = 2 p2 - p1 (an overestimate: p2 includes the collectives).
-  line=$(grep -h "rank(s) x" "ranks.$reps.err" | tail -1)
-  field() { sed -nE "s/$1/\\1/p" <<< "$line"; }
-  p2=$(field '.* s, ([0-9.]+) ms each.*')
-  line=$(grep -h "rank(s) x" "one.$reps.err" | tail -1)
-  total_one=$(field '.*thread\(s\): ([0-9.]+) s, of which.*')
-  p1=$(field '.* s, ([0-9.]+) ms each.*')
-  plain_total=$(field '.*without moves ([0-9.]+) s,.*')
+  p2=$(field ranks '.* s, ([0-9.]+) ms each.*')
+  total_one=$(field one '.*thread\(s\): ([0-9.]+) s, of which.*')
+  p1=$(field one '.* s, ([0-9.]+) ms each.*')
+  plain_total=$(field one '.*without moves ([0-9.]+) s,.*')
   stage_serial=$(calc "(2 * $p2 - $p1 > 0 ? 2 * $p2 - $p1 : 0) / 1000")
-  par=$(calc "($(field '.*of which tables ([0-9.]+) s.*') + $(field '.*sweeps in all ([0-9.]+) s.*') + $(field '.*final sweeps ([0-9.]+) s.*') + $plain_total) / $records - $stage_serial")
+  split_s=$(calc "$(field one '.*of which tables ([0-9.]+) s.*') + $(field one '.*sweeps in all ([0-9.]+) s.*') + $(field one '.*final sweeps ([0-9.]+) s.*') + $plain_total")
+  par=$(calc "$split_s / $records - $stage_serial")
   ser=$(calc "$total_one / $records - $par")
   echo
   echo "## Projection: a 200-site, 20-million-record year (one thread per rank)"
