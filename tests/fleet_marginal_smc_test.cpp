@@ -1,6 +1,8 @@
 // The marginal core (fleet/marginal_smc.hpp): IBIS over θ on the truck tables.
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <numeric>
 #include <sstream>
 
 #include <catch2/catch.hpp>
@@ -357,4 +359,85 @@ TEST_CASE("the options that shape the lateral pieces are refused by name when ou
   CHECK_THROWS_WITH(make([](auto& o) { o.min_piece_sd_m = 0.0; }), Catch::Contains("min_piece_sd_m"));
   CHECK_THROWS_WITH(make([](auto& o) { o.table.mode_margin_nats = -1.0; }), Catch::Contains("mode_margin_nats"));
   CHECK_NOTHROW(make([](auto&) {}));
+}
+
+TEST_CASE("the final sweeps' clouds are pooled into the posterior until the next truck", "[marginal][schedule]") {
+  const Case c(12, 4);
+  const Eigen::Index P = 128;
+  fleet::MarginalSmc smc(c.site, options(P, 2, 8));
+  for (std::size_t t = 0; t + 1 < c.log.records.size(); ++t) smc.absorb(c.log.records[t]);
+  CHECK(smc.pooled_sweeps() == 0);
+  CHECK(smc.cloud().theta.cols() == P);  // no final sweeps yet: the particles as they stand
+
+  smc.rejuvenate(4);
+  const fleet::PosteriorCloud pooled = smc.cloud(), last = smc.current_cloud();
+  CHECK(smc.pooled_sweeps() == 4);
+  CHECK(pooled.pooled_sweeps == 4);
+  REQUIRE(pooled.theta.cols() == 4 * P);
+  REQUIRE(pooled.weights.size() == 4 * P);
+  CHECK(pooled.weights.sum() == Approx(1.0).epsilon(1e-12));
+  // The last sweep's copy is the cloud as it stands; each particle keeps its weight, shared over
+  // its four copies (a move does not reweight).
+  CHECK(pooled.theta.rightCols(P) == last.theta);
+  for (int k = 0; k < 4; ++k) {
+    CHECK((pooled.weights.segment(k * P, P) * 4.0 - last.weights).abs().maxCoeff() < 1e-15);
+    // Every sweep moved the cloud: its copies differ from the last one's.
+    if (k < 3) CHECK((pooled.theta.middleCols(k * P, P).array() != last.theta.array()).count() > P);
+  }
+  // Rejuvenating again pools the new sweeps only.
+  smc.rejuvenate(2);
+  CHECK(smc.cloud().theta.cols() == 2 * P);
+  CHECK(smc.cloud().theta.leftCols(P) != pooled.theta.rightCols(P));
+
+  // A new truck changes the posterior: the pool is dropped.
+  smc.absorb(c.log.records.back());
+  CHECK(smc.pooled_sweeps() == 0);
+  CHECK(smc.cloud().theta.cols() == P);
+  CHECK(smc.cloud().pooled_sweeps == 0);
+}
+
+TEST_CASE("the pooled final sweeps estimate the posterior means with less Monte Carlo error, and the same ones",
+          "[marginal][statistical]") {
+  // 16 SMC seeds on one 40-truck log, 1024 particles and 15 final sweeps (fit's defaults). For each
+  // hyperparameter the scatter of the 16 posterior means over its posterior sd, squared, is 1 / the
+  // equivalent ESS; summed over the 7, for the last cloud alone and for the pool. Measured with 24
+  // seeds: the pool's sum 6.1 times smaller (ESS 2,183-5,543 against 341-798). With 15 degrees of
+  // freedom per hyperparameter each sum is known to a χ² factor: even at 40 effective degrees of
+  // freedom, a true ratio of 5 shows below 2 with probability 0.2 %, so a ratio below 2 means the
+  // pool does not buy what it is kept for.
+  const Case c(40, 4);
+  constexpr int kSeeds = 16;
+  std::array<std::vector<double>, fleet::kHyperCount> last, pooled;
+  std::array<double, fleet::kHyperCount> sd{};
+  for (int s = 0; s < kSeeds; ++s) {
+    fleet::MarginalSmc smc(c.site, options(1024, 2, 100 + static_cast<std::uint64_t>(s)));
+    for (const auto& r : c.log.records) smc.absorb(r);
+    smc.rejuvenate(15);
+    const auto a = fleet::summarise_cloud(smc.current_cloud()), b = fleet::summarise_cloud(smc.cloud());
+    for (std::size_t h = 0; h < fleet::kHyperCount; ++h) {
+      last[h].push_back(a[h].mean);
+      pooled[h].push_back(b[h].mean);
+      sd[h] += b[h].sd / kSeeds;
+    }
+  }
+  auto mean_of = [](const std::vector<double>& x) { return std::accumulate(x.begin(), x.end(), 0.0) / static_cast<double>(x.size()); };
+  auto var_of = [&](const std::vector<double>& x) {
+    const double m = mean_of(x);
+    double v = 0.0;
+    for (double e : x) v += (e - m) * (e - m);
+    return v / static_cast<double>(x.size() - 1);
+  };
+  double last_sum = 0.0, pooled_sum = 0.0;
+  for (std::size_t h = 0; h < fleet::kHyperCount; ++h) {
+    last_sum += var_of(last[h]) / (sd[h] * sd[h]);
+    pooled_sum += var_of(pooled[h]) / (sd[h] * sd[h]);
+    // The same target: the paired difference of the two estimates averages to zero within 4 of its
+    // standard errors.
+    std::vector<double> diff;
+    for (int s = 0; s < kSeeds; ++s) diff.push_back(pooled[h][static_cast<std::size_t>(s)] - last[h][static_cast<std::size_t>(s)]);
+    INFO(fleet::kHyperNames[h] << ": pooled - last " << mean_of(diff) / sd[h] << " sd");
+    CHECK(std::abs(mean_of(diff)) <= 4.0 * std::sqrt(var_of(diff) / kSeeds));
+  }
+  INFO("sum of (scatter / sd)^2: last cloud " << last_sum << ", pool " << pooled_sum);
+  CHECK(last_sum / pooled_sum > 2.0);
 }

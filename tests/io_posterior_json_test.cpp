@@ -59,7 +59,8 @@ void write(const std::string& path, const fleet::PosteriorCloud& c) {
 bool same(const fleet::PosteriorCloud& a, const fleet::PosteriorCloud& b) {
   return a.theta == b.theta && (a.weights == b.weights).all() && a.speed_mps == b.speed_mps &&
          a.sprung_mass_kg == b.sprung_mass_kg && a.site_fingerprint == b.site_fingerprint && a.model == b.model &&
-         a.psi == b.psi && a.trucks_seen == b.trucks_seen && a.ess == b.ess && a.sensors == b.sensors;
+         a.psi == b.psi && a.trucks_seen == b.trucks_seen && a.ess == b.ess && a.sensors == b.sensors &&
+         a.pooled_sweeps == b.pooled_sweeps;
 }
 }  // namespace
 
@@ -233,4 +234,27 @@ TEST_CASE("a posterior file over the size limit is refused before it is parsed",
   CHECK(e->field() == "size");
   CHECK(std::string(e->what()).find(path) != std::string::npos);
   CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(1));
+}
+
+TEST_CASE("a posterior pooled from final sweeps says how many, and a negative count is refused by name", "[io][posterior]") {
+  test::TempDir dir;
+  auto cloud = random_cloud(12, 5, false);
+  cloud.pooled_sweeps = 3;  // 12 draws: 3 sweeps' copies of 4 particles
+  const std::string path = dir.file("p.json");
+  write(path, cloud);
+  auto j = nlohmann::json::parse(test::read_text(path));
+  CHECK(j["pooled_sweeps"] == 3);
+  CHECK(j["particles"] == 12);
+  CHECK(io::read_posterior_file(path).pooled_sweeps == 3);
+  // A file without the field (written before pooling, or by the MCMC) holds no pool.
+  cloud.pooled_sweeps = 0;
+  write(path, cloud);
+  CHECK_FALSE(nlohmann::json::parse(test::read_text(path)).contains("pooled_sweeps"));
+  CHECK(io::read_posterior_file(path).pooled_sweeps == 0);
+  j.erase("checksum");
+  j["pooled_sweeps"] = -2;
+  test::write_text(path, j.dump(1));
+  const auto e = test::data_error([&] { io::read_posterior_file(path); });
+  REQUIRE(e);
+  CHECK(e->field() == "pooled_sweeps");
 }

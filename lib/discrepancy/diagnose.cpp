@@ -65,15 +65,12 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
   fleet::replay(*f.online, records, replay);
   f.fit.log_evidence = f.online->sampler().log_evidence();
   f.fit.wall_s = seconds_since(start);
-  const Eigen::MatrixXd* theta = nullptr;
-  if (const fleet::FleetSmc* latent = f.online->latent()) {
+  if (const fleet::FleetSmc* latent = f.online->latent())
     f.fit.integrator_passes = latent->target().integrator_passes();
-    theta = &latent->target().theta();
-  } else {
+  else
     f.fit.integrator_passes = f.online->marginal()->target().integrator_passes();
-    theta = &f.online->marginal()->target().theta();
-  }
-  const auto hyper = fleet::summarise_weighted(*theta, f.online->sampler().weights());
+  // The posterior as fit reports it (on the marginal core, the final sweeps' clouds pooled).
+  const auto hyper = fleet::summarise_cloud(f.online->cloud());
   std::copy(hyper.begin(), hyper.end(), f.fit.hyper.begin());
   return f;
 }

@@ -40,7 +40,13 @@ void MarginalSmc::note_site(std::uint32_t site, std::size_t truck) {
   if (recent_[site].size() > per_site) recent_[site].pop_front();
 }
 
+void MarginalSmc::drop_pool() {
+  pooled_theta_.resize(0, 0);
+  pooled_sweeps_ = 0;
+}
+
 smc::StageSummary MarginalSmc::absorb(const records::WimRecord& record) {
+  drop_pool();  // the posterior is about to change: the pooled clouds no longer draw from it
   target_.add_truck(record.speed_mps, record.sprung_mass_kg, record.impact_factor, sampler_.weights(), parallel_,
                     record.site);
   truck_ids_.push_back(record.truck_id);
@@ -70,11 +76,31 @@ void MarginalSmc::prepare(const std::vector<records::WimRecord>& records, std::s
 
 smc::MhSummary MarginalSmc::rejuvenate(int sweeps) {
   if (sweeps < 0) throw UsageError("MarginalSmc::rejuvenate: sweeps must be >= 0");
+  drop_pool();
   if (sweeps == 0) return {};
-  return sampler_.move(target_, "final rejuvenation", sweeps);
+  const Eigen::Index P = options_.sampler.particles;
+  Eigen::MatrixXd pool(kHyperCount, P * sweeps);
+  const smc::MhSummary s = sampler_.move(target_, "final rejuvenation", sweeps, [&](int sweep) {
+    pool.middleCols(sweep * P, P) = target_.theta();
+  });
+  pooled_theta_ = std::move(pool);
+  pooled_sweeps_ = sweeps;
+  return s;
 }
 
 PosteriorCloud MarginalSmc::cloud() const {
+  PosteriorCloud c = current_cloud();
+  if (pooled_sweeps_ == 0) return c;
+  // The pool: the weights do not change in a move, so every sweep's copy of particle i carries W_i.
+  c.theta = pooled_theta_;
+  // (Through a temporary: Eigen would resize the destination before reading a replicate of itself.)
+  const Eigen::ArrayXd one_sweep = c.weights;
+  c.weights = one_sweep.replicate(pooled_sweeps_, 1) / static_cast<double>(pooled_sweeps_);
+  c.pooled_sweeps = pooled_sweeps_;
+  return c;
+}
+
+PosteriorCloud MarginalSmc::current_cloud() const {
   const auto& v = target_.speed_mps();
   const auto& m = target_.sprung_mass_kg();
   if (sites_.size() == 1) {
@@ -192,6 +218,7 @@ void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {
     target_.load_trucks(trucks, 1);
     trucks.check_seal("truck record");
   }
+  drop_pool();
   site_trucks_.assign(sites_.size(), 0);
   recent_.assign(sites_.size(), {});
   const auto& of = target_.truck_sites();

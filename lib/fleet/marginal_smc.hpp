@@ -55,13 +55,23 @@ class MarginalSmc {
   // table options cover, one truck per thread (MarginalTarget::prebuild). Only a speed-up for an
   // offline replay: absorb() gives the same bits without it.
   void prepare(const std::vector<records::WimRecord>& records, std::size_t next);
-  // MCMC sweeps at φ = 1 (the posterior is unchanged; the cloud's duplicates spread out).
+  // MCMC sweeps at φ = 1 (the posterior is unchanged; the cloud's duplicates spread out). Every
+  // sweep's cloud is a weighted draw of the same posterior, so all of them are kept and cloud()
+  // hands out their pool (sweeps × particles draws, each particle's weight shared over its copies)
+  // until the next absorb(): the "waste-free" use of a final phase (Dau & Chopin 2022). Measured
+  // on 1,000 Table 1 trucks, 16 SMC seeds, 15 sweeps: the smallest equivalent ESS of the posterior
+  // means (seed scatter) 2,650 for the pool against 389 for the last cloud alone, at no extra cost.
   smc::MhSummary rejuvenate(int sweeps);
+  // Clouds pooled by the last rejuvenate() (0 once a truck has been absorbed since).
+  int pooled_sweeps() const { return pooled_sweeps_; }
 
   long trucks_seen() const { return static_cast<long>(target_.trucks()); }
   const MarginalTarget& target() const { return target_; }
   const smc::TemperedSampler& sampler() const { return sampler_; }
+  // The posterior: the pool of the last rejuvenate()'s sweeps if no truck came since, else the
+  // current weighted particles (current_cloud()).
   PosteriorCloud cloud() const;
+  PosteriorCloud current_cloud() const;
   const std::deque<std::string>& truck_ids() const { return truck_ids_; }
   // What the last absorb() rebuilt, if anything ("" = nothing).
   const std::string& last_rebuild() const { return last_rebuild_; }
@@ -101,6 +111,11 @@ class MarginalSmc {
   smc::ParallelFor parallel_;
   std::deque<std::string> truck_ids_;
   std::string last_rebuild_;
+  // θ after each sweep of the last rejuvenate(), side by side (kHyperCount × pooled_sweeps_ · P).
+  // A report of the final phase, not state: never checkpointed (a resumed fit runs the sweeps again).
+  Eigen::MatrixXd pooled_theta_;
+  int pooled_sweeps_ = 0;
+  void drop_pool();
 };
 
 }  // namespace ssrfleet::fleet

@@ -33,7 +33,10 @@ struct PosteriorCloud {
   int sensors = 0;
   double lateral_min_m = 0.0, lateral_max_m = 0.0;
   long trucks_seen = 0;
-  double ess = 0.0;
+  double ess = 0.0;               // SMC: the weights' ESS of one sweep's cloud (of the P particles)
+  // SMC: the number of final sweeps whose clouds are pooled in theta (each particle's weight shared
+  // over its copies); 0: theta is the particles as they stand (an online stream, or no final sweeps).
+  int pooled_sweeps = 0;
   double log_evidence = 0.0;      // log p(y_1:n), SMC only (NaN for MCMC)
   // The model fitted (model/model_spec.hpp): "base", or a spec such as
   // "tyre_damping+sensor_gain:sensor=11", and the draws of its free parameters ψ, one row per

@@ -183,7 +183,8 @@ StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view l
   return summary;
 }
 
-MhSummary TemperedSampler::move(TemperedModel& model, std::string_view label, int sweeps) {
+MhSummary TemperedSampler::move(TemperedModel& model, std::string_view label, int sweeps,
+                                 const SweepObserver& after_sweep) {
   const Eigen::Index P = options_.particles;
   if (model.particles() != P) throw UsageError("TemperedSampler::move: the model's particle count differs from options.particles");
   if (sweeps < 1) throw UsageError("TemperedSampler::move: sweeps must be >= 1");
@@ -195,7 +196,7 @@ MhSummary TemperedSampler::move(TemperedModel& model, std::string_view label, in
   const MhSummary s = run_sweeps(model, 1.0, W, log_base, loglik,
                                  root_.child(kStandaloneMove, static_cast<std::uint64_t>(stages_run_),
                                              static_cast<std::uint64_t>(moves_run_)),
-                                 parallel_, options_.mh, options_.schedule, sweeps, sweeps, runs, label);
+                                 parallel_, options_.mh, options_.schedule, sweeps, sweeps, runs, label, after_sweep);
   ++moves_run_;
   return s;
 }

@@ -104,8 +104,10 @@ class TemperedSampler {
   // Exactly `sweeps` sweeps of the schedule at φ = 1 on the current cloud, outside any stage (the
   // schedule's final_sweeps after the last record): leaves the target and the weights unchanged.
   // Random streams are keyed by the stage count and a per-call counter, so call it between stages
-  // only. Returns what the sweeps did.
-  MhSummary move(TemperedModel& model, std::string_view label, int sweeps);
+  // only. after_sweep (if set) is called after each sweep, with the model holding that sweep's
+  // states (waste-free use of a final phase: every sweep's cloud is a draw of the same target).
+  // Returns what the sweeps did.
+  MhSummary move(TemperedModel& model, std::string_view label, int sweeps, const SweepObserver& after_sweep = {});
 
   // Streams for the model's own draws before stage `stages_run()` (prior draws, new latents):
   // use model_rngs().stream(i) for particle i. Disjoint from the engine's streams.

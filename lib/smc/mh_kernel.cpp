@@ -230,7 +230,8 @@ void record_run(MoveRecord& r, double acceptance) {
 MhSummary run_sweeps(TemperedModel& model, double phi, const Eigen::Ref<const Eigen::ArrayXd>& W,
                      Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik, const RngFactory& rngs,
                      const ParallelFor& parallel, const MhOptions& proposal, const MoveSchedule& schedule,
-                     int min_sweeps, int max_sweeps, std::vector<int>& runs_in_stage, std::string_view stage_label) {
+                     int min_sweeps, int max_sweeps, std::vector<int>& runs_in_stage, std::string_view stage_label,
+                     const SweepObserver& after_sweep) {
   const Eigen::Index P = model.particles();
   const std::vector<BlockSpec> blocks = model.blocks();
   const std::size_t nb = blocks.size(), ns = schedule.sweep.size();
@@ -336,6 +337,7 @@ MhSummary run_sweeps(TemperedModel& model, double phi, const Eigen::Ref<const Ei
       e = group_end;
     }
     summary.sweeps = sweep + 1;
+    if (after_sweep) after_sweep(sweep);
 
     // How far has the cloud moved since the start? (weighted mean squared Mahalanobis jump / 2d)
     bool far_enough = true;

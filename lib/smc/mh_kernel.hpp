@@ -20,6 +20,7 @@
 // mean squared jump stops growing), made scale free and with an absolute target.
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <string>
 #include <string_view>
@@ -99,9 +100,13 @@ Eigen::MatrixXd proposal_covariance(const Eigen::Ref<const Eigen::MatrixXd>& X,
 // for particle i. runs_in_stage: per schedule entry, its runs earlier in this stage (updated; for
 // max_runs_per_stage). NumericalError names the particle, the block and the stage label if the
 // model returns NaN; UsageError if the schedule names a model move the model does not have.
+// after_sweep, if set, is called after each sweep with its 0-based index, the model holding the
+// states that sweep left (a caller that pools every sweep's cloud reads them there).
+using SweepObserver = std::function<void(int sweep)>;
 MhSummary run_sweeps(TemperedModel& model, double phi, const Eigen::Ref<const Eigen::ArrayXd>& W,
                      Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik, const RngFactory& rngs,
                      const ParallelFor& parallel, const MhOptions& proposal, const MoveSchedule& schedule,
-                     int min_sweeps, int max_sweeps, std::vector<int>& runs_in_stage, std::string_view stage_label);
+                     int min_sweeps, int max_sweeps, std::vector<int>& runs_in_stage, std::string_view stage_label,
+                     const SweepObserver& after_sweep = {});
 
 }  // namespace ssrfleet::smc
