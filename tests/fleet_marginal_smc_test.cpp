@@ -394,6 +394,28 @@ TEST_CASE("the final sweeps' clouds are pooled into the posterior until the next
   CHECK(smc.pooled_sweeps() == 0);
   CHECK(smc.cloud().theta.cols() == P);
   CHECK(smc.cloud().pooled_sweeps == 0);
+
+  // A pool capped below sweeps × particles keeps the last sweeps' clouds only, the same bits as the
+  // tail of an uncapped pool of the same run.
+  auto capped_options = options(P, 2, 8);
+  capped_options.max_pooled_draws = 2 * P + 1;
+  fleet::MarginalSmc capped(c.site, capped_options), uncapped(c.site, options(P, 2, 8));
+  for (std::size_t t = 0; t + 1 < c.log.records.size(); ++t) {
+    capped.absorb(c.log.records[t]);
+    uncapped.absorb(c.log.records[t]);
+  }
+  capped.rejuvenate(4);
+  uncapped.rejuvenate(4);
+  CHECK(capped.pooled_sweeps() == 2);
+  REQUIRE(capped.cloud().theta.cols() == 2 * P);
+  CHECK(capped.cloud().theta == uncapped.cloud().theta.rightCols(2 * P));
+  CHECK(capped.cloud().weights.sum() == Approx(1.0).epsilon(1e-12));
+  capped_options.max_pooled_draws = P - 1;  // below one cloud: the last cloud alone
+  fleet::MarginalSmc one(c.site, capped_options);
+  for (std::size_t t = 0; t + 1 < c.log.records.size(); ++t) one.absorb(c.log.records[t]);
+  one.rejuvenate(4);
+  CHECK(one.pooled_sweeps() == 1);
+  CHECK(one.cloud().theta == uncapped.current_cloud().theta);
 }
 
 TEST_CASE("the pooled final sweeps estimate the posterior means with less Monte Carlo error, and the same ones",

@@ -79,12 +79,15 @@ smc::MhSummary MarginalSmc::rejuvenate(int sweeps) {
   drop_pool();
   if (sweeps == 0) return {};
   const Eigen::Index P = options_.sampler.particles;
-  Eigen::MatrixXd pool(kHyperCount, P * sweeps);
+  // The last `kept` sweeps' clouds (all of them unless that would pass max_pooled_draws).
+  const int kept = static_cast<int>(std::clamp<std::int64_t>(options_.max_pooled_draws / P, 1, sweeps));
+  Eigen::MatrixXd pool(kHyperCount, P * kept);
   const smc::MhSummary s = sampler_.move(target_, "final rejuvenation", sweeps, [&](int sweep) {
-    pool.middleCols(sweep * P, P) = target_.theta();
+    const int slot = sweep - (sweeps - kept);
+    if (slot >= 0) pool.middleCols(slot * P, P) = target_.theta();
   });
   pooled_theta_ = std::move(pool);
-  pooled_sweeps_ = sweeps;
+  pooled_sweeps_ = kept;
   return s;
 }
 
