@@ -34,7 +34,7 @@ void FitFlags::add_to(po::options_description& desc) {
       ("particles", po::value(&particles)->default_value(particles), "number of particles P (>= 2)")
       ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
       ("final-sweeps", po::value(&final_sweeps)->default_value(final_sweeps),
-       "MCMC sweeps after the last truck: the same posterior, less seed-to-seed error (latent core: 50 unless given)")
+       "MCMC sweeps after the last truck: the same posterior, less seed-to-seed error; the marginal core's posterior pools every sweep's cloud (latent core: 50 unless given, not pooled)")
       ("cess", po::value(&cess_target)->default_value(cess_target, shortest_text(cess_target)), "conditional-ESS target of each tempering step, in (0, 1)")
       ("max-sweeps", po::value(&max_sweeps)->default_value(max_sweeps), "MCMC sweeps per move phase at most (latent core: per tempering step, 5 unless given)")
       ("older-sweeps", po::value(&older_sweeps)->default_value(older_sweeps),

@@ -40,11 +40,6 @@ void MarginalSmc::note_site(std::uint32_t site, std::size_t truck) {
   if (recent_[site].size() > per_site) recent_[site].pop_front();
 }
 
-void MarginalSmc::drop_pool() {
-  pooled_theta_.resize(0, 0);
-  pooled_sweeps_ = 0;
-}
-
 smc::StageSummary MarginalSmc::absorb(const records::WimRecord& record) {
   drop_pool();  // the posterior is about to change: the pooled clouds no longer draw from it
   target_.add_truck(record.speed_mps, record.sprung_mass_kg, record.impact_factor, sampler_.weights(), parallel_,
@@ -87,19 +82,19 @@ smc::MhSummary MarginalSmc::rejuvenate(int sweeps) {
     if (slot >= 0) pool.middleCols(slot * P, P) = target_.theta();
   });
   pooled_theta_ = std::move(pool);
-  pooled_sweeps_ = kept;
   return s;
 }
 
 PosteriorCloud MarginalSmc::cloud() const {
   PosteriorCloud c = current_cloud();
-  if (pooled_sweeps_ == 0) return c;
+  const int sweeps = pooled_sweeps();
+  if (sweeps == 0) return c;
   // The pool: the weights do not change in a move, so every sweep's copy of particle i carries W_i.
   c.theta = pooled_theta_;
   // (Through a temporary: Eigen would resize the destination before reading a replicate of itself.)
   const Eigen::ArrayXd one_sweep = c.weights;
-  c.weights = one_sweep.replicate(pooled_sweeps_, 1) / static_cast<double>(pooled_sweeps_);
-  c.pooled_sweeps = pooled_sweeps_;
+  c.weights = one_sweep.replicate(sweeps, 1) / static_cast<double>(sweeps);
+  c.pooled_sweeps = sweeps;
   return c;
 }
 

@@ -70,7 +70,7 @@ class MarginalSmc {
   // from the same fits. At most Options::max_pooled_draws draws are kept (the last sweeps').
   smc::MhSummary rejuvenate(int sweeps);
   // Clouds pooled by the last rejuvenate() (0 once a truck has been absorbed since).
-  int pooled_sweeps() const { return pooled_sweeps_; }
+  int pooled_sweeps() const { return static_cast<int>(pooled_theta_.cols() / options_.sampler.particles); }
 
   long trucks_seen() const { return static_cast<long>(target_.trucks()); }
   const MarginalTarget& target() const { return target_; }
@@ -118,11 +118,11 @@ class MarginalSmc {
   smc::ParallelFor parallel_;
   std::deque<std::string> truck_ids_;
   std::string last_rebuild_;
-  // θ after each sweep of the last rejuvenate(), side by side (kHyperCount × pooled_sweeps_ · P).
-  // A report of the final phase, not state: never checkpointed (a resumed fit runs the sweeps again).
+  // θ after each pooled sweep of the last rejuvenate(), side by side (kHyperCount × sweeps · P;
+  // no columns: no pool). A report of the final phase, not state: never checkpointed (a resumed
+  // fit runs the sweeps again).
   Eigen::MatrixXd pooled_theta_;
-  int pooled_sweeps_ = 0;
-  void drop_pool();
+  void drop_pool() { pooled_theta_.resize(kHyperCount, 0); }
 };
 
 }  // namespace ssrfleet::fleet
