@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 
 #include "io/posterior_json.hpp"
+#include "road/erd_format.hpp"
 #include "test_support.hpp"
 
 using namespace ssrfleet;
@@ -71,4 +72,30 @@ TEST_CASE("a positions range FIRST:STEP:LAST past a long or not finite is a usag
     CHECK(r.status == 64);
     CHECK_THAT(r.err, Catch::Contains(std::string("--positions '") + positions + "'"));
   }
+}
+
+TEST_CASE("an ERD header that declares millions of channels costs what its bytes do, and is refused as truncated",
+          "[road][fuzz]") {
+  // fuzz/erd_fuzzer, a timeout: NCHAN = 1e6 and a header of many SHORTNAM and UNITSNAM lines, each
+  // split into a million fields as it was read (4 s for 5 kB; minutes for this input). The fields
+  // are now split once, after the data are known to hold the channels.
+  std::string text = "ERDFILEV2.00\n1000000,100,5,0.05,-11,1,5,0.05,-1\n";
+  for (int i = 0; i < 2000; ++i) text += "SHORTNAMpr1\nUNITSNAMmm\n";
+  text += "END\n1 2 3\n";
+  auto e = data_error([&] { road::read_erd(text, "fuzzed.erd"); });
+  REQUIRE(e);
+  CHECK(e->field() == "data");
+  CHECK(e->reason().find("truncated") != std::string::npos);
+  // 5e7 channels of 2 samples: the per-channel labels and units (3 GB of strings) were allocated
+  // before the data were counted.
+  text = "ERDFILEV2.00\n50000000,2,5,0.05,-11,1,5,0.05,-1\nSHORTNAMa\nEND\n1 2\n";
+  e = data_error([&] { road::read_erd(text, "fuzzed.erd"); });
+  REQUIRE(e);
+  CHECK(e->field() == "data");
+  // A unit is still checked before the data: an unknown one is named with its channel.
+  text = "ERDFILEV2.00\n2,3,5,0.05,-11,1,5,0.05,-1\nUNITSNAMmm      furlong\nEND\n1 2\n";
+  e = data_error([&] { road::read_erd(text, "fuzzed.erd"); });
+  REQUIRE(e);
+  CHECK(e->field() == "UNITSNAM");
+  CHECK(e->reason().find("'furlong' of channel 2") != std::string::npos);
 }

@@ -1,5 +1,6 @@
 #include "road/erd_format.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <ostream>
 #include <stdexcept>
@@ -31,13 +32,16 @@ Line next_line(std::string_view bytes, std::size_t pos, std::size_t number) {
   return {text, number, lf == std::string_view::npos ? bytes.size() : lf + 1};
 }
 
-// One fixed-width field per channel (SHORTNAM, UNITSNAM), trimmed; missing fields are empty.
+// Channel k's fixed-width field of a SHORTNAM or UNITSNAM value, trimmed; empty if missing.
+std::string channel_field(std::string_view value, std::size_t k) {
+  const std::size_t at = k * kKeywordWidth;
+  return at < value.size() ? std::string(trim_blanks(value.substr(at, kKeywordWidth))) : std::string();
+}
+
+// One field per channel.
 std::vector<std::string> channel_fields(std::string_view value, std::size_t channels) {
   std::vector<std::string> fields(channels);
-  for (std::size_t k = 0; k < channels; ++k) {
-    const std::size_t at = k * kKeywordWidth;
-    if (at < value.size()) fields[k] = std::string(trim_blanks(value.substr(at, kKeywordWidth)));
-  }
+  for (std::size_t k = 0; k < channels; ++k) fields[k] = channel_field(value, k);
   return fields;
 }
 
@@ -117,8 +121,11 @@ LongitudinalProfiles read_erd(std::string_view bytes, const std::string& source)
   const auto channels = static_cast<std::size_t>(format[0]);
   const auto samples = static_cast<std::size_t>(format[1]);
 
-  // Header lines up to END.
-  std::vector<std::string> labels(channels), units(channels);
+  // Header lines up to END. A later SHORTNAM or UNITSNAM line replaces an earlier one; their values
+  // are split into one field per channel only once the data are known to hold that many channels
+  // (a header may declare millions of channels in a few bytes, and split each such line again:
+  // fuzz/erd_fuzzer timed out on 5 kB of them).
+  std::string_view short_names, unit_names;
   std::size_t units_line = 0;
   std::string x_units;
   std::size_t x_units_line = 0;
@@ -132,9 +139,9 @@ LongitudinalProfiles read_erd(std::string_view bytes, const std::string& source)
       ended = true;
       break;
     }
-    if (keyword == "SHORTNAM") labels = channel_fields(value, channels);
+    if (keyword == "SHORTNAM") short_names = value;
     if (keyword == "UNITSNAM") {
-      units = channel_fields(value, channels);
+      unit_names = value;
       units_line = number;
     }
     if (keyword == "XUNITS") {
@@ -144,13 +151,14 @@ LongitudinalProfiles read_erd(std::string_view bytes, const std::string& source)
   }
   if (!ended) throw DataError(source, number, "END", "no END line: the header never ends");
 
-  std::vector<double> scale(channels);
-  for (std::size_t k = 0; k < channels; ++k) {
-    scale[k] = metres_per(units[k]);
-    if (scale[k] == 0.0) {
+  // Every unit known (a channel past the UNITSNAM value's fields has none: metres).
+  const std::size_t named_units = std::min(channels, unit_names.size() / kKeywordWidth + 1);
+  for (std::size_t k = 0; k < named_units; ++k) {
+    const std::string unit = channel_field(unit_names, k);
+    if (metres_per(unit) == 0.0) {
       throw DataError(
           source, units_line, "UNITSNAM",
-          "unknown unit '" + units[k] + "' of channel " + std::to_string(k + 1) + " (m, mm, cm, in, ft)");
+          "unknown unit '" + unit + "' of channel " + std::to_string(k + 1) + " (m, mm, cm, in, ft)");
     }
   }
   const double x_scale = metres_per(x_units);
@@ -167,6 +175,10 @@ LongitudinalProfiles read_erd(std::string_view bytes, const std::string& source)
                         std::to_string(channels) + " channels, but only " +
                         std::to_string(bytes.size() - data_begin) + " bytes of data follow END");
   }
+  // The data hold at least 2 bytes per value, so the per-channel fields are bounded by the file.
+  const std::vector<std::string> labels = channel_fields(short_names, channels);
+  std::vector<double> scale(channels);
+  for (std::size_t k = 0; k < channels; ++k) scale[k] = metres_per(channel_field(unit_names, k));
   LongitudinalProfiles p;
   p.name = source;
   p.dx_m = format[5] * x_scale;
