@@ -1,16 +1,15 @@
 #include "cli_common.hpp"
 
-#include "fleet/joint_sites.hpp"
-
-#include "io/posterior_json.hpp"
-
 #include <charconv>
+#include <cmath>
 #include <functional>
 #include <iostream>
-#include <cmath>
+#include <optional>
 #include <sstream>
 
+#include "fleet/joint_sites.hpp"
 #include "io/atomic_file.hpp"
+#include "io/posterior_json.hpp"
 #include "site/road_source.hpp"
 #include "smc/engine.hpp"
 #include "util/errors.hpp"
@@ -139,14 +138,25 @@ site::Site site_of_manifest_entry(const io::SiteManifest& manifest, const io::Ma
   } catch (const std::runtime_error& e) {  // DataError (the road file's own fault), UsageError, MissingInputError
     fail("road", e.what());
   }
+  std::optional<site::Site> site;
   try {
-    return site::Site(std::move(surface), options);
+    site.emplace(std::move(surface), options);
   } catch (const UsageError& e) {  // a sensor beyond the road's end
     fail("sensors", e.what());
   } catch (const DataError& e) {  // missing cells under the trucks' stretch
     fail("road", e.what());
   }
-  throw std::logic_error("site_of_manifest_entry: unreachable");
+  const std::size_t gains = entry.calibration.size();
+  if (gains != 0 && gains != static_cast<std::size_t>(site->sensors())) {
+    fail("calibration", std::to_string(gains) + " gains for " + std::to_string(site->sensors()) +
+                            " sensors (one gain per sensor, in sensor order)");
+  }
+  return std::move(*site);
+}
+
+Eigen::VectorXd manifest_sensor_gains(const io::ManifestSite& entry, int sensors) {
+  if (entry.calibration.empty()) return Eigen::VectorXd::Ones(sensors);
+  return Eigen::Map<const Eigen::VectorXd>(entry.calibration.data(), static_cast<Eigen::Index>(entry.calibration.size()));
 }
 
 std::vector<const site::Site*> ManifestSites::pointers() const {
@@ -181,7 +191,12 @@ std::vector<records::WimRecord> read_manifest_site_log(const io::SiteManifest& m
                     "one input names each record's site, may leave it out)");
   }
   try {
-    return read_site_log(entry.log, site, flags, limits);
+    std::vector<records::WimRecord> records = read_site_log(entry.log, site, flags, limits);
+    if (!entry.calibration.empty()) {
+      const Eigen::VectorXd gains = manifest_sensor_gains(entry, site.sensors());
+      for (auto& r : records) fleet::remove_sensor_gains(r, gains);
+    }
+    return records;
   } catch (const DataError& e) {
     throw DataError(e.file(), e.line(), e.field(),
                     "site '" + entry.name + "' of manifest '" + manifest.path + "': " + e.reason());

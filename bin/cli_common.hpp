@@ -64,8 +64,11 @@ std::vector<records::WimRecord> read_site_log(const std::string& path, const sit
 // sensors in it (for read_manifest_site_log).
 site::Site site_of_manifest_entry(const io::SiteManifest& manifest, const io::ManifestSite& entry, SiteFlags& flags,
                                   std::ostream* warnings);
+// The gains of a manifest site's sensors (its "calibration"; every gain 1 without one), `sensors`
+// long (site_of_manifest_entry has checked the count).
+Eigen::VectorXd manifest_sensor_gains(const io::ManifestSite& entry, int sensors);
 // read_site_log for a manifest's site: the same errors (file, line, field), each reason starting
-// with the site and the manifest.
+// with the site and the manifest. A site's calibration is divided out of every record.
 std::vector<records::WimRecord> read_manifest_site_log(const io::SiteManifest& manifest, const io::ManifestSite& entry,
                                                        const site::Site& site, const SiteFlags& flags,
                                                        const io::WimLimits& limits = {});

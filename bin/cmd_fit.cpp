@@ -22,7 +22,8 @@ namespace ssrfleet::cli {
 int run_fit(int argc, const char* const argv[]) {
   std::string log_path, road = "AS1", out = "posterior.json", seed_text = "1", method = "smc", manifest_path, site_name;
   FitFlags fit;
-  bool quiet = false, fhwa = false;
+  bool quiet = false, fhwa = false, calibrate = false;
+  int calibration_rounds = discrepancy::CalibrationOptions{}.max_rounds;
   SiteFlags site_flags;
   po::options_description desc("fit options");
   desc.add_options()
@@ -32,6 +33,11 @@ int run_fit(int argc, const char* const argv[]) {
        "a site manifest (JSON: each site's name, road, sensors and log): one fleet posterior from all its sites; "
        "with --site, fit that site alone")
       ("site", po::value(&site_name), "the manifest's site to fit (its log, road and sensors from the manifest)")
+      ("calibrate", po::bool_switch(&calibrate),
+       "with --sites: fit each site's sensor gains beside the fleet (Monte Carlo EM from the manifest's calibration; "
+       "README \"Sensor calibration\")")
+      ("calibration-rounds", po::value(&calibration_rounds)->default_value(calibration_rounds),
+       "with --calibrate: the most fits the EM runs (it stops when no gain moves by 0.3 of its standard error)")
       ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
       ("out,o", po::value(&out)->default_value(out), "posterior file to write (JSON)")
       ("method", po::value(&method)->default_value(method), "smc (sequential, default) or mcmc (the paper's batch baseline)")
@@ -72,12 +78,19 @@ int run_fit(int argc, const char* const argv[]) {
   if (!manifest_path.empty()) {
     refuse_beside_sites(vm, {"log", "road", "sensors"});
     if (site_name.empty()) {
-      fit_manifest_sites({manifest_path, out, method, seed, quiet}, fit, site_flags, limits);
+      if (calibration_rounds < 1) throw UsageError("--calibration-rounds must be at least 1");
+      fit_manifest_sites({manifest_path, out, method, seed, quiet, calibrate, calibration_rounds}, fit, site_flags, limits);
       return 0;
+    }
+    if (calibrate) {
+      throw UsageError("--calibrate fits the sensors of every site of the manifest at once; drop --site (a manifest "
+                       "that lists one site calibrates that site alone)");
     }
     manifest = io::read_site_manifest(manifest_path);
     entry = &manifest->find(site_name);
     log_path = entry->log;
+  } else if (calibrate) {
+    throw UsageError("--calibrate needs --sites MANIFEST (the sites whose sensors it calibrates)");
   } else if (!site_name.empty()) {
     throw UsageError("--site names a site of a manifest: give the manifest with --sites");
   } else if (log_path.empty()) {
@@ -96,9 +109,15 @@ int run_fit(int argc, const char* const argv[]) {
   std::ostream* progress = quiet ? nullptr : &std::cerr;
   fit_classes_to_file(records, seed, out, quiet ? nullptr : &std::cerr,
                       [&](const std::vector<records::WimRecord>& class_records, std::uint64_t class_seed) {
-                        return method == "smc"
-                                   ? fit_smc(site, class_records, fit, class_seed, progress, model.extension.get())
-                                   : fit_mcmc(site, class_records, fit, class_seed, progress, model.extension.get());
+                        fleet::PosteriorCloud cloud =
+                            method == "smc"
+                                ? fit_smc(site, class_records, fit, class_seed, progress, model.extension.get())
+                                : fit_mcmc(site, class_records, fit, class_seed, progress, model.extension.get());
+                        // The manifest's calibration was divided out of the records (read_manifest_site_log).
+                        if (entry != nullptr && !entry->calibration.empty()) {
+                          cloud.calibration = {{entry->name, entry->calibration, {}}};
+                        }
+                        return cloud;
                       });
   if (!quiet) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

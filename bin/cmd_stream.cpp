@@ -86,7 +86,7 @@ int run_stream(int argc, const char* const argv[]) {
   std::vector<stream::WimStream::StreamSite> stream_sites;
   if (manifest_path.empty()) {
     sites.sites.push_back(std::make_unique<site::Site>(site::load_road(road, &std::cerr), site_flags.to_options()));
-    stream_sites.push_back({"", sites.sites.back().get()});
+    stream_sites.push_back({"", sites.sites.back().get(), {}});
   } else {
     refuse_beside_sites(vm, {"road", "sensors"});
     if (options.fit.latent.window > 0 || model_text != "base") {
@@ -95,7 +95,12 @@ int run_stream(int argc, const char* const argv[]) {
     }
     const io::SiteManifest manifest = io::read_site_manifest(manifest_path);
     sites = build_manifest_sites(manifest, site_flags, &std::cerr);
-    for (std::size_t s = 0; s < manifest.sites.size(); ++s) stream_sites.push_back({manifest.sites[s].name, sites.sites[s].get()});
+    for (std::size_t s = 0; s < manifest.sites.size(); ++s) {
+      const io::ManifestSite& entry = manifest.sites[s];
+      Eigen::VectorXd gains;  // none: the state keeps naming the site as before calibrations
+      if (!entry.calibration.empty()) gains = manifest_sensor_gains(entry, sites.sites[s]->sensors());
+      stream_sites.push_back({entry.name, sites.sites[s].get(), gains});
+    }
   }
   const site::Site& site = *sites.sites.front();
   const fleet::ModelSpec model = fleet::parse_model_spec(model_text, site);

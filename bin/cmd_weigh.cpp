@@ -62,7 +62,20 @@ int run_weigh(int argc, const char* const argv[]) {
   }
   const fleet::PosteriorCloud& cloud = classes.front().cloud;
   require_fitted_site(cloud, posterior_path, site, "; weigh needs the road and site options the posterior was fitted with");
-  const auto records = io::read_force_log_file(log_path, site.sensors(), "(--sensors " + site_flags.sensors + ")");
+  auto records = io::read_force_log_file(log_path, site.sensors(), "(--sensors " + site_flags.sensors + ")");
+  // A site whose sensors the fit calibrated (README "Sensor calibration"): its forces read gain x the
+  // true ones, which is divided out here as the fit divided it out of the impact factors.
+  if (cloud.calibration.size() == 1) {
+    const std::vector<double>& gain = cloud.calibration.front().gain;
+    if (gain.size() != static_cast<std::size_t>(site.sensors())) {
+      throw DataError(posterior_path, 0, "calibration", "site '" + cloud.calibration.front().site + "' has " +
+                                                            std::to_string(gain.size()) + " gains for " +
+                                                            std::to_string(site.sensors()) + " sensors");
+    }
+    const Eigen::Map<const Eigen::ArrayXd> g(gain.data(), static_cast<Eigen::Index>(gain.size()));
+    for (auto& r : records) r.force_n.array() /= g;
+    if (!quiet) std::cerr << "ssrfleet weigh: the site's sensor calibration from the posterior is divided out of the forces\n";
+  }
 
   std::vector<records::StaticWeight> weights;
   weights.reserve(records.size());

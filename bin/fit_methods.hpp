@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <ostream>
 #include <vector>
 
@@ -56,6 +57,10 @@ fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records:
 // marginal core only (UsageError for options that need the latent one).
 fleet::PosteriorCloud fit_smc(const std::vector<const site::Site*>& sites, const std::vector<records::WimRecord>& records,
                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress);
+// The same, handing back the fit itself (what sensor calibration draws the trucks' latents from).
+std::unique_ptr<fleet::OnlineFit> fit_smc_online(const std::vector<const site::Site*>& sites,
+                                                 const std::vector<records::WimRecord>& records, const FitFlags& flags,
+                                                 std::uint64_t seed, std::ostream* progress);
 fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
                                const FitFlags& flags, std::uint64_t seed, std::ostream* progress,
                                const fleet::ModelExtension* extension = nullptr);

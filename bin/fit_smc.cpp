@@ -121,9 +121,10 @@ fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t 
 }
 
 namespace {
-fleet::PosteriorCloud fit_smc_on(const std::vector<const site::Site*>& sites,
-                                 const std::vector<records::WimRecord>& records, const FitFlags& flags,
-                                 std::uint64_t seed, std::ostream* progress, const fleet::ModelExtension* extension) {
+std::unique_ptr<fleet::OnlineFit> fit_smc_on(const std::vector<const site::Site*>& sites,
+                                             const std::vector<records::WimRecord>& records, const FitFlags& flags,
+                                             std::uint64_t seed, std::ostream* progress,
+                                             const fleet::ModelExtension* extension) {
   fleet::OnlineFitOptions o = online_fit_options(flags, seed, extension);
   const int final_sweeps = flags.final_sweeps_given ? flags.final_sweeps : o.default_final_sweeps();
   auto smc = fleet::make_online_fit(sites, o);
@@ -236,18 +237,24 @@ fleet::PosteriorCloud fit_smc_on(const std::vector<const site::Site*>& sites,
   }
   // Printed even with --quiet: it is about the answer, not the progress.
   if (const std::string w = smc->warning(); !w.empty()) std::cerr << "ssrfleet fit: warning: " << w << "\n";
-  return smc->cloud();
+  return smc;
 }
 }  // namespace
 
 fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records::WimRecord>& records,
                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress,
                               const fleet::ModelExtension* extension) {
-  return fit_smc_on({&site}, records, flags, seed, progress, extension);
+  return fit_smc_on({&site}, records, flags, seed, progress, extension)->cloud();
 }
 
 fleet::PosteriorCloud fit_smc(const std::vector<const site::Site*>& sites, const std::vector<records::WimRecord>& records,
                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress) {
+  return fit_smc_on(sites, records, flags, seed, progress, nullptr)->cloud();
+}
+
+std::unique_ptr<fleet::OnlineFit> fit_smc_online(const std::vector<const site::Site*>& sites,
+                                                 const std::vector<records::WimRecord>& records, const FitFlags& flags,
+                                                 std::uint64_t seed, std::ostream* progress) {
   return fit_smc_on(sites, records, flags, seed, progress, nullptr);
 }
 

@@ -2,6 +2,8 @@
 // (check, --names, --collect), scripts/fit-sites.sh (GNU parallel) and scripts/fit-sites.sbatch
 // (a Slurm array task), and a bad manifest entry named by manifest, site and field.
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <sstream>
@@ -333,4 +335,139 @@ TEST_CASE("sites --check writes a row per site with its conflict p-value and nam
   const auto one = run_ssrfleet("sites " + q(s.manifest) + " --check --quiet", s.dir);
   CHECK(one.status == 64);
   CHECK(one.err.find("has one site") != std::string::npos);
+}
+
+namespace {
+// A copy of a simulated log whose if_j (or force_j) columns are multiplied by gains[j - 1], printed
+// to round-trip.
+void write_gained_log(const std::string& from, const std::string& to, const std::vector<double>& gains,
+                      const std::string& prefix = "if_") {
+  std::istringstream in(test::read_text(from));
+  std::string line, out;
+  std::vector<std::string> header;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') {
+      out += line + "\n";
+      continue;
+    }
+    std::vector<std::string> fields;
+    std::stringstream ss(line);
+    for (std::string f; std::getline(ss, f, ',');) fields.push_back(f);
+    if (header.empty()) {
+      header = fields;
+      out += line + "\n";
+      continue;
+    }
+    for (std::size_t c = 0; c < fields.size(); ++c) {
+      if (header[c].rfind(prefix, 0) != 0) continue;
+      const std::size_t j = std::stoul(header[c].substr(prefix.size())) - 1;
+      char buf[40];
+      std::snprintf(buf, sizeof buf, "%.17g", std::stod(fields[c]) * gains.at(j));
+      fields[c] = buf;
+    }
+    std::string joined;
+    for (std::size_t c = 0; c < fields.size(); ++c) joined += (c ? "," : "") + fields[c];
+    out += joined + "\n";
+  }
+  test::write_text(to, out);
+}
+}  // namespace
+
+TEST_CASE("a manifest's known sensor calibration is divided out of its site's records before the fit",
+          "[cli][sites][calibration]") {
+  TwoSites s;
+  // Gains of 2 and 0.5 multiply and divide a double exactly: the corrected log is the clean log's bits.
+  std::vector<double> north(16, 1.0);
+  north[4] = 2.0;
+  north[9] = 0.5;
+  write_gained_log(s.dir.file("a.csv"), s.dir.file("a-gained.csv"), north);
+  const std::string clean = s.dir.file("clean.json"), corrected = s.dir.file("corrected.json");
+  REQUIRE(run_ssrfleet("fit --sites " + q(s.manifest) + " --particles 64 --seed 3 --quiet --out " + q(clean), s.dir).status == 0);
+  const auto manifest_with = [&](const std::string& calibration) {
+    test::write_text(s.manifest, R"({"sites": [
+        {"name": "north", "road": "AS1", "sensors": "76,1.5,16", "log": "a-gained.csv", "calibration": )" + calibration + R"(},
+        {"name": "south", "road": "AS2", "sensors": "70,2,8", "log": "b.csv"}]})");
+  };
+  manifest_with("[1,1,1,1,2,1,1,1,1,0.5,1,1,1,1,1,1]");
+  const auto r = run_ssrfleet("fit --sites " + q(s.manifest) + " --particles 64 --seed 3 --quiet --out " + q(corrected), s.dir);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  const auto a = io::read_posterior_file(clean), b = io::read_posterior_file(corrected);
+  CHECK(a.theta == b.theta);
+  CHECK((a.weights == b.weights).all());
+  CHECK(a.calibration.empty());
+  REQUIRE(b.calibration.size() == 2);
+  CHECK(b.calibration[0].site == "north");
+  CHECK(b.calibration[0].gain == north);
+  CHECK(b.calibration[0].se.empty());  // known, not fitted
+  CHECK(b.calibration[1].gain == std::vector<double>(8, 1.0));
+  // The same site fitted alone through the manifest is corrected too, and says so.
+  const std::string alone = s.dir.file("alone.json");
+  REQUIRE(run_ssrfleet("fit --sites " + q(s.manifest) + " --site north --particles 64 --seed 3 --quiet --out " + q(alone), s.dir)
+              .status == 0);
+  const std::string plain = s.dir.file("plain.json");
+  REQUIRE(run_ssrfleet("fit " + q(s.dir.file("a.csv")) + " --particles 64 --seed 3 --quiet --out " + q(plain), s.dir).status == 0);
+  CHECK(io::read_posterior_file(alone).theta == io::read_posterior_file(plain).theta);
+  CHECK(io::read_posterior_file(alone).calibration.size() == 1);
+
+  // weigh divides the posterior's calibration of the site out of the forces: the gained forces
+  // weighed with the calibrated posterior give the clean forces' weights with the clean posterior.
+  REQUIRE(run_ssrfleet("simulate --road AS1 --trucks 3 --seed 9 --forces --quiet --out " + q(s.dir.file("forces.csv")), s.dir)
+              .status == 0);
+  write_gained_log(s.dir.file("forces.csv"), s.dir.file("forces-gained.csv"), north, "force_");
+  const auto weigh = [&](const std::string& forces, const std::string& posterior) {
+    const auto w = run_ssrfleet("weigh " + q(forces) + " --posterior " + q(posterior) + " --sites " + q(s.manifest) +
+                                    " --site north --draws 10 --trucks-per-draw 10 --quiet",
+                                s.dir);
+    INFO(w.err);
+    CHECK(w.status == 0);
+    return w.out;
+  };
+  const std::string clean_weights = weigh(s.dir.file("forces.csv"), clean);
+  CHECK(std::count(clean_weights.begin(), clean_weights.end(), '\n') == 4);
+  CHECK(weigh(s.dir.file("forces-gained.csv"), corrected) == clean_weights);
+  CHECK(weigh(s.dir.file("forces-gained.csv"), clean) != clean_weights);
+
+  // A calibration of another sensor count is named by manifest, site and field.
+  manifest_with("[1, 1.02]");
+  const auto bad = run_ssrfleet("fit --sites " + q(s.manifest) + " --particles 64 --quiet --out " + q(s.dir.file("x.json")), s.dir);
+  CHECK(bad.status == 65);
+  CHECK(bad.err.find(s.manifest) != std::string::npos);
+  CHECK(bad.err.find("sites[0].calibration") != std::string::npos);
+  CHECK(bad.err.find("site 'north'") != std::string::npos);
+  CHECK(bad.err.find("2 gains for 16 sensors") != std::string::npos);
+}
+
+TEST_CASE("fit --sites --calibrate fits every site's sensor gains and records them with standard errors",
+          "[cli][sites][calibration]") {
+  TwoSites s;
+  const std::string out = s.dir.file("cal.json");
+  const auto r = run_ssrfleet("fit --sites " + q(s.manifest) + " --calibrate --calibration-rounds 2 --particles 64 --seed 3 --out " + q(out),
+                              s.dir);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  CHECK(r.err.find("calibration round 1: largest gain step") != std::string::npos);
+  CHECK(r.err.find("site south sensor gains:") != std::string::npos);
+  const auto cloud = io::read_posterior_file(out);
+  REQUIRE(cloud.calibration.size() == 2);
+  CHECK(cloud.calibration[0].gain.size() == 16);
+  REQUIRE(cloud.calibration[1].se.size() == 8);
+  for (const auto& c : cloud.calibration) {
+    for (std::size_t j = 0; j < c.gain.size(); ++j) {
+      // Clean logs of 24 trucks: every gain is 1 within a few of its standard errors (about 0.006).
+      CHECK(c.se[j] > 0.0);
+      CHECK(c.se[j] < 0.02);
+      CHECK(std::abs(c.gain[j] - 1.0) < 5.0 * c.se[j]);
+    }
+  }
+  const auto usage = [&](const std::string& args, const std::string& says) {
+    const auto u = run_ssrfleet("fit " + args + " --particles 64 --quiet --out " + q(s.dir.file("x.json")), s.dir);
+    INFO(args << ": " << u.err);
+    CHECK(u.status == 64);
+    CHECK(u.err.find(says) != std::string::npos);
+  };
+  usage("--sites " + q(s.manifest) + " --site north --calibrate", "drop --site");
+  usage(q(s.dir.file("a.csv")) + " --calibrate", "needs --sites");
+  usage("--sites " + q(s.manifest) + " --calibrate --checkpoint " + q(s.dir.file("ck")), "--checkpoint with --calibrate");
+  usage("--sites " + q(s.manifest) + " --calibrate --calibration-rounds 0", "--calibration-rounds");
 }

@@ -4,6 +4,7 @@
 // site written before states named their sites.
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <optional>
@@ -335,4 +336,59 @@ TEST_CASE("a stream state written before sites (stream format 4, truck records w
   REQUIRE(again.status == 0);
   CHECK(again.err.find("0 trucks absorbed, 0 rejected") != std::string::npos);
   CHECK(test::read_text(c.state + "/posterior.json") == expected);
+}
+
+TEST_CASE("a stream divides a site's known calibration out of its records, and refuses to resume with another",
+          "[cli][stream][sites][calibration]") {
+  TwoSiteStream s;
+  const std::string straight = s.dir.file("clean");
+  REQUIRE(s.stream(straight, s.input(s.lines, "clean.csv")).status == 0);
+  // North's sensor 3 read double and its sensor 7 half (exact in binary: the corrected records are
+  // the clean ones' bits), as the manifest's calibration says.
+  std::vector<std::string> gained;
+  const auto north = TwoSiteStream::records_of(s.dir.file("a.csv"), "north", 16);
+  for (const std::string& line : north) {
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", std::stod(f[4 + 2]) * 2.0);
+    f[4 + 2] = buf;
+    std::snprintf(buf, sizeof buf, "%.17g", std::stod(f[4 + 6]) * 0.5);
+    f[4 + 6] = buf;
+    std::string joined;
+    for (std::size_t c = 0; c < f.size(); ++c) joined += (c ? "," : "") + f[c];
+    gained.push_back(joined);
+  }
+  std::vector<std::string> lines = s.lines;
+  for (std::size_t i = 0; i < gained.size(); ++i) lines[2 * i] = gained[i];  // north's records come first in each pair
+  const auto manifest_with = [&](const std::string& calibration) {
+    test::write_text(s.manifest, R"({"sites": [
+        {"name": "north", "road": "AS1", "sensors": "76,1.5,16", "calibration": )" + calibration + R"(},
+        {"name": "south", "road": "AS2", "sensors": "70,2,8"}]})");
+  };
+  manifest_with("[1,1,2,1,1,1,0.5,1,1,1,1,1,1,1,1,1]");
+  const std::string state = s.dir.file("calibrated");
+  const std::string input = s.input(lines, "gained.csv");
+  const auto r = s.stream(state, input);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  const auto a = io::read_posterior_file(straight), b = io::read_posterior_file(state);
+  CHECK(a.theta == b.theta);
+  CHECK((a.weights == b.weights).all());
+  CHECK(a.calibration.empty());
+  REQUIRE(b.calibration.size() == 2);
+  CHECK(b.calibration[0].gain[2] == 2.0);
+  CHECK(b.calibration[0].gain[6] == 0.5);
+  // Another calibration is another site: the absorbed trucks were corrected with these gains.
+  manifest_with("[1,1,2,1,1,1,0.6,1,1,1,1,1,1,1,1,1]");
+  const auto other = s.stream(state, input);
+  CHECK(other.status == 65);
+  CHECK(other.err.find("north (calibration 1,1,2,1,1,1,0.5,") != std::string::npos);
+  CHECK(other.err.find("north (calibration 1,1,2,1,1,1,0.59999999999999998,") != std::string::npos);
+  // The same calibration resumes.
+  manifest_with("[1,1,2,1,1,1,0.5,1,1,1,1,1,1,1,1,1]");
+  const auto again = s.stream(state, input);
+  INFO(again.err);
+  CHECK(again.status == 0);
 }

@@ -258,3 +258,45 @@ TEST_CASE("a posterior pooled from final sweeps says how many, and a negative co
   REQUIRE(e);
   CHECK(e->field() == "pooled_sweeps");
 }
+
+TEST_CASE("a posterior keeps its sites' sensor calibration, known or fitted, and refuses a bad one by name",
+          "[io][posterior]") {
+  test::TempDir dir;
+  auto cloud = random_cloud(40, 7, false);  // the draws of the checksum test, which read back bit for bit
+  cloud.calibration = {{"north", {1.0, 1.0625, 0.97}, {0.001, 0.0015, 0.002}}, {"south", {0.95, 1.0}, {}}};
+  const std::string path = dir.file("p.json");
+  write(path, cloud);
+  const auto back = io::read_posterior_file(path);
+  REQUIRE(back.calibration.size() == 2);
+  CHECK(back.calibration[0].site == "north");
+  CHECK(back.calibration[0].gain == cloud.calibration[0].gain);
+  CHECK(back.calibration[0].se == cloud.calibration[0].se);
+  CHECK(back.calibration[1].gain == cloud.calibration[1].gain);
+  CHECK(back.calibration[1].se.empty());  // a known calibration has no standard errors
+  CHECK(same(back, cloud));
+  // Without a calibration the key is absent, and a file without it reads as none.
+  cloud.calibration.clear();
+  write(path, cloud);
+  CHECK_FALSE(nlohmann::json::parse(test::read_text(path)).contains("calibration"));
+  CHECK(io::read_posterior_file(path).calibration.empty());
+
+  const auto refused = [&](const std::function<void(nlohmann::json&)>& edit, const std::string& field) {
+    cloud.calibration = {{"north", {1.0, 1.0625}, {0.001, 0.0015}}};
+    write(path, cloud);
+    auto j = nlohmann::json::parse(test::read_text(path));
+    j.erase("checksum");
+    edit(j);
+    test::write_text(path, j.dump(1));
+    const auto e = test::data_error([&] { io::read_posterior_file(path); });
+    INFO(field);
+    REQUIRE(e);
+    CHECK(e->field() == field);
+  };
+  refused([](nlohmann::json& j) { j["calibration"] = nlohmann::json::array(); }, "calibration");
+  refused([](nlohmann::json& j) { j["calibration"][0]["gain"][1] = 0.0; }, "calibration[0].gain");
+  refused([](nlohmann::json& j) { j["calibration"][0]["gain"] = nlohmann::json::array(); }, "calibration[0].gain");
+  refused([](nlohmann::json& j) { j["calibration"][0]["se"][0] = -0.1; }, "calibration[0].se");
+  refused([](nlohmann::json& j) { j["calibration"][0]["se"] = {0.1}; }, "calibration[0].se");
+  refused([](nlohmann::json& j) { j["calibration"][0].erase("site"); }, "calibration[0].site");
+  refused([](nlohmann::json& j) { j["calibration"][0] = 3; }, "calibration[0]");
+}

@@ -118,3 +118,30 @@ TEST_CASE("a site manifest past its size limit is refused before it is parsed", 
   CHECK(e->field() == "size");
   CHECK(seconds < 1.0);
 }
+
+TEST_CASE("a site's calibration is one gain per sensor in [0.5, 2], and a bad one is named down to the gain",
+          "[io][sites]") {
+  ManifestDir d;
+  test::write_text(d.manifest, R"({"sites": [
+      {"name": "north", "road": "AS1", "sensors": "76,1.5,4", "log": "logs/a.csv", "calibration": [1, 1.06, 0.5, 2]},
+      {"name": "south", "road": "AS1", "sensors": "76,1.5,4", "log": "logs/a.csv"}]})");
+  const io::SiteManifest m = io::read_site_manifest(d.manifest);
+  CHECK(m.sites[0].calibration == std::vector<double>{1.0, 1.06, 0.5, 2.0});
+  CHECK(m.sites[1].calibration.empty());
+  const auto site_with = [](const std::string& calibration) {
+    return R"({"sites": [{"name": "n", "road": "AS1", "sensors": "76,1.5,2", "log": "logs/a.csv", "calibration": )" +
+           calibration + "}]}";
+  };
+  for (const char* bad : {"[]", "1.02", "{\"1\": 1.0}"}) {
+    const DataError e = d.error(site_with(bad));
+    CHECK(e.field() == "sites[0].calibration");
+    CHECK(e.reason().find("site 'n'") != std::string::npos);
+  }
+  for (const char* bad : {"[1, 0.49]", "[1, 2.01]", "[1, \"1\"]", "[1, null]", "[1, -1]"}) {
+    const DataError e = d.error(site_with(bad));
+    INFO(bad);
+    CHECK(e.field() == "sites[0].calibration[1]");
+    CHECK(e.reason().find("[0.5, 2]") != std::string::npos);
+    CHECK(e.reason().find("sensor 2") != std::string::npos);
+  }
+}

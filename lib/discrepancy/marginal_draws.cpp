@@ -32,10 +32,23 @@ double log_target(const Eigen::Ref<const Eigen::VectorXd>& observed, const Eigen
 TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::MarginalTarget& target,
                                     const fleet::HyperVector& theta, const smc::RngFactory& streams, int mh_steps,
                                     MarginalDrawStats* stats) {
+  std::vector<std::size_t> all(static_cast<std::size_t>(target.trucks()));
+  for (std::size_t t = 0; t < all.size(); ++t) all[t] = t;
+  return draw_truck_latents(site, target, theta, streams, mh_steps, all, stats);
+}
+
+TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::MarginalTarget& target,
+                                    const fleet::HyperVector& theta, const smc::RngFactory& streams, int mh_steps,
+                                    const std::vector<std::size_t>& trucks, MarginalDrawStats* stats) {
   // Every truck's table, in truck order: a target on one rank (diagnose runs on one process).
   if (target.ranks().size() != 1) throw std::logic_error("draw_truck_latents: needs every truck's table (one rank)");
-  const auto n = static_cast<Eigen::Index>(target.trucks());
+  const auto n = static_cast<Eigen::Index>(trucks.size());
   const int M = site.sensors();
+  for (const std::size_t t : trucks) {
+    if (t >= static_cast<std::size_t>(target.trucks()) || target.observed_if()[t].size() != M) {
+      throw std::logic_error("draw_truck_latents: truck " + std::to_string(t) + " is not one of this site's");
+    }
+  }
   const double lo = site.lateral_min_m(), hi = site.lateral_max_m();
   const fleet::LateralRange range{lo, hi};
   std::vector<smc::Rng> rng;
@@ -45,8 +58,8 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
   site::TruckBatch batch;
   batch.resize(n);
   for (Eigen::Index i = 0; i < n; ++i) {
-    const auto t = static_cast<std::size_t>(i);
-    rng.push_back(streams.stream(static_cast<std::uint64_t>(i)));
+    const std::size_t t = trucks[static_cast<std::size_t>(i)];
+    rng.push_back(streams.stream(static_cast<std::uint64_t>(t)));
     proposal.emplace_back(target.tables().view(t), target.marginal(), theta);
     batch.speed_mps[i] = target.speed_mps()[t];
     batch.sprung_mass_kg[i] = target.sprung_mass_kg()[t];
@@ -83,7 +96,7 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
       const auto t = static_cast<std::size_t>(i);
       if (step > 0) ++proposals;
       if (!admissible[t]) continue;
-      const double lp = log_target(target.observed_if()[t], g.col(i), y[t], theta, range);
+      const double lp = log_target(target.observed_if()[trucks[t]], g.col(i), y[t], theta, range);
       const double lq = proposal[t].log_density(y[t]);
       bool take = step == 0;
       if (!take) {

@@ -41,6 +41,12 @@ struct TruckLatentDraws {
 TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::MarginalTarget& target,
                                     const fleet::HyperVector& theta, const smc::RngFactory& streams, int mh_steps,
                                     MarginalDrawStats* stats = nullptr);
+// The same for some of the target's trucks, all of `site` (a fit over several sites draws each
+// site's trucks through their own site): columns in the order of `trucks`, truck t's randomness
+// from streams.stream(t) as above.
+TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::MarginalTarget& target,
+                                    const fleet::HyperVector& theta, const smc::RngFactory& streams, int mh_steps,
+                                    const std::vector<std::size_t>& trucks, MarginalDrawStats* stats = nullptr);
 
 // UsageError on bad options. The draws' latents are exact draws from p(x_i | y_i, θ) up to the
 // MH chain's convergence from the table proposal.

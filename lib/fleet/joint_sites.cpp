@@ -59,6 +59,11 @@ PosteriorCloud cloud_at_site(const PosteriorCloud& cloud, std::size_t site) {
   out.lateral_min_m = s.lateral_min_m;
   out.lateral_max_m = s.lateral_max_m;
   out.sites.clear();
+  // The site's own sensor calibration, if the fit had any.
+  out.calibration.clear();
+  for (const auto& c : cloud.calibration) {
+    if (c.site == s.name) out.calibration.push_back(c);
+  }
   return out;
 }
 
@@ -74,6 +79,14 @@ std::size_t find_cloud_site(const PosteriorCloud& cloud, const std::string& name
   }
   throw UsageError("--site " + name + ": the posterior in '" + posterior_path + "' has no such site (its sites: " +
                    names + ")");
+}
+
+void remove_sensor_gains(records::WimRecord& record, const Eigen::VectorXd& gains) {
+  if (gains.size() != record.impact_factor.size()) {
+    throw std::invalid_argument("remove_sensor_gains: " + std::to_string(gains.size()) + " gains for " +
+                                std::to_string(record.impact_factor.size()) + " sensors");
+  }
+  record.impact_factor.array() /= gains.array();
 }
 
 }  // namespace ssrfleet::fleet

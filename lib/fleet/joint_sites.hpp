@@ -26,11 +26,16 @@ std::string sites_fingerprint(const std::vector<const site::Site*>& sites);
 // order; its Monte Carlo error does).
 std::vector<records::WimRecord> merge_site_records(std::vector<std::vector<records::WimRecord>> per_site);
 
+// A site's sensors read gain x the true impact factor (a calibration, known or fitted: README "Sensor
+// calibration"): divides each of the record's impact factors by its sensor's gain, so the fleet model
+// sees the true ones. Every gain must be positive; std::invalid_argument if the counts differ.
+void remove_sensor_gains(records::WimRecord& record, const Eigen::VectorXd& gains);
+
 // The cloud of a fit over several sites seen from one of them: the site's fields at the top level,
 // its own trucks as trucks_seen and as the speed and mass pool (every site's pool when it has no
 // trucks: a vehicle class may skip a site, a young stream may not have reached it; trucks_seen is
 // then 0, and a caller weighing classes by their trucks there falls back on the whole's), no site
-// list. The posterior of θ is the joint one.
+// list, and only that site's sensor calibration. The posterior of θ is the joint one.
 // std::out_of_range if `site` is not an index of cloud.sites.
 PosteriorCloud cloud_at_site(const PosteriorCloud& cloud, std::size_t site);
 // The index in cloud.sites of the site named `name`; UsageError listing the names otherwise.

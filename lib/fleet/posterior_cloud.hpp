@@ -22,6 +22,15 @@ struct CloudSite {
   std::size_t pool_begin = 0, pool_count = 0;  // speed_mps[pool_begin, pool_begin + pool_count)
 };
 
+// The sensor calibration one site's records were corrected with before the fit (README "Sensor
+// calibration"): sensor j read gain[j] x the true impact factor. `se` holds the gains' standard
+// errors when the fit estimated them (fit --calibrate); empty for a known calibration (a manifest's).
+struct SiteCalibration {
+  std::string site;  // the manifest's name for it
+  std::vector<double> gain;
+  std::vector<double> se;
+};
+
 struct PosteriorCloud {
   std::string method;             // "smc" or "mcmc"
   Eigen::MatrixXd theta;          // kHyperCount x draws (fleet_model.hpp order)
@@ -49,6 +58,9 @@ struct PosteriorCloud {
   // the roads joined by '+', the first site's sensors and lateral range; the pool holds every site's
   // trucks, site by site.
   std::vector<CloudSite> sites;
+  // Per site, in the fit's order, when any site's records were corrected (empty otherwise). Predict
+  // does not use it: a gain is the instrument's, not the force the road feels.
+  std::vector<SiteCalibration> calibration;
 };
 
 }  // namespace ssrfleet::fleet

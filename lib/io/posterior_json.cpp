@@ -15,6 +15,7 @@
 #include "io/atomic_file.hpp"
 #include "model/fleet_model.hpp"
 #include "records/vehicle_class.hpp"
+#include "site/sensor_array.hpp"
 #include "util/binary_io.hpp"
 #include "util/errors.hpp"
 
@@ -96,6 +97,15 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vect
     }
     j["site"]["sites"] = std::move(sites);
   }
+  if (!c.calibration.empty()) {
+    nlohmann::json calibration = nlohmann::json::array();
+    for (const auto& s : c.calibration) {
+      nlohmann::json e = {{"site", s.site}, {"gain", s.gain}};
+      if (!s.se.empty()) e["se"] = s.se;
+      calibration.push_back(std::move(e));
+    }
+    j["calibration"] = std::move(calibration);
+  }
   nlohmann::json theta = nlohmann::json::array();
   for (Eigen::Index i = 0; i < c.theta.cols(); ++i) {
     nlohmann::json row = nlohmann::json::array();
@@ -153,12 +163,19 @@ T get_field(const nlohmann::json& j, const char* key, const std::string& file, c
   }
 }
 
-std::vector<double> finite_array(const nlohmann::json& j, const char* key, const std::string& file, const std::string& P) {
-  auto v = get_field<std::vector<double>>(j, key, file, P + "cloud.");
+// An array of finite numbers at j[key], named where + key in messages.
+std::vector<double> finite_numbers(const nlohmann::json& j, const char* key, const std::string& file,
+                                   const std::string& where) {
+  auto v = get_field<std::vector<double>>(j, key, file, where);
   for (double x : v) {
-    if (!std::isfinite(x)) throw DataError(file, 0, P + "cloud." + key, "holds a non-finite number");
+    if (!std::isfinite(x)) throw DataError(file, 0, where + key, "holds a non-finite number");
   }
   return v;
+}
+
+// The same for an array of the cloud (P prefixes the object's fields).
+std::vector<double> finite_array(const nlohmann::json& j, const char* key, const std::string& file, const std::string& P) {
+  return finite_numbers(j, key, file, P + "cloud.");
 }
 }  // namespace
 
@@ -227,6 +244,39 @@ void parse_sites(const nlohmann::json& sites, const std::string& path, const std
   }
 }
 
+// The sensor calibration of the sites (posterior_cloud.hpp, SiteCalibration): per site its name, its
+// gains (positive) and, if they were fitted, their standard errors (one per gain, >= 0).
+void parse_calibration(const nlohmann::json& list, const std::string& path, const std::string& where,
+                       fleet::PosteriorCloud& c) {
+  if (!list.is_array() || list.empty()) throw DataError(path, 0, where, "must be a non-empty array of sites' gains");
+  if (list.size() > kMaxPosteriorSites) {
+    throw DataError(path, 0, where, "lists " + std::to_string(list.size()) + " sites, more than this build reads (" +
+                                        std::to_string(kMaxPosteriorSites) + ")");
+  }
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string P = where + "[" + std::to_string(i) + "].";
+    const nlohmann::json& e = list[i];
+    if (!e.is_object()) throw DataError(path, 0, where + "[" + std::to_string(i) + "]", "must be an object");
+    fleet::SiteCalibration s;
+    s.site = get_field<std::string>(e, "site", path, P);
+    s.gain = finite_numbers(e, "gain", path, P);
+    if (s.gain.empty() || s.gain.size() > static_cast<std::size_t>(site::kMaxSensors)) {
+      throw DataError(path, 0, P + "gain", "must hold one gain per sensor");
+    }
+    for (double g : s.gain) {
+      if (!(g > 0.0)) throw DataError(path, 0, P + "gain", "holds a gain that is not positive");
+    }
+    if (e.contains("se")) {
+      s.se = finite_numbers(e, "se", path, P);
+      if (s.se.size() != s.gain.size()) throw DataError(path, 0, P + "se", "needs one standard error per gain");
+      for (double x : s.se) {
+        if (x < 0.0) throw DataError(path, 0, P + "se", "holds a negative standard error");
+      }
+    }
+    c.calibration.push_back(std::move(s));
+  }
+}
+
 // One posterior object (the whole single-class file, or one entry of "classes"); P prefixes the
 // fields' names in messages ("" or "classes[i].").
 fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std::string& path, const std::string& P) {
@@ -277,6 +327,7 @@ fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std:
   c.weights /= total;
   // The model: files written before models existed are the base model's.
   if (site.contains("sites")) parse_sites(site["sites"], path, P + "site.sites", c);
+  if (j.contains("calibration")) parse_calibration(j["calibration"], path, P + "calibration", c);
   c.model = j.contains("model") ? get_field<std::string>(j, "model", path, P) : "base";
   if (c.model.empty()) throw DataError(path, 0, P + "model", "is empty (\"base\" or a model spec)");
   if (c.model != "base" && cloud.contains("psi")) {  // none when the spec fixes every parameter

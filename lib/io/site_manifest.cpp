@@ -1,6 +1,7 @@
 #include "io/site_manifest.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -16,7 +17,7 @@ namespace ssrfleet::io {
 namespace fs = std::filesystem;
 
 namespace {
-constexpr const char* kSiteKeys[] = {"name", "road", "sensors", "log"};
+constexpr const char* kSiteKeys[] = {"name", "road", "sensors", "log", "calibration"};
 
 std::string resolve(const std::string& folder, const std::string& path) {
   const fs::path p(path);
@@ -100,6 +101,22 @@ SiteManifest read_site_manifest(std::istream& in, const std::string& path, const
     if (!s.log.empty() && !fs::is_regular_file(s.log)) {
       throw DataError(path, 0, at + ".log",
                       "site '" + s.name + "': no log file '" + s.log + "' (paths are relative to the manifest's folder)");
+    }
+    if (e.contains("calibration")) {
+      const auto& gains = e["calibration"];
+      const std::string where = at + ".calibration";
+      if (!gains.is_array() || gains.empty()) {
+        throw DataError(path, 0, where, "site '" + s.name + "': must be an array of gains, one per sensor");
+      }
+      for (std::size_t k = 0; k < gains.size(); ++k) {
+        const double g = gains[k].is_number() ? gains[k].get<double>() : std::nan("");
+        if (!(g >= kMinCalibrationGain && g <= kMaxCalibrationGain)) {
+          throw DataError(path, 0, where + "[" + std::to_string(k) + "]",
+                          "site '" + s.name + "': must be a number in [0.5, 2] (sensor " + std::to_string(k + 1) +
+                              "'s gain: it reports gain x the true impact factor)");
+        }
+        s.calibration.push_back(g);
+      }
     }
     m.sites.push_back(std::move(s));
   }

@@ -2,6 +2,9 @@
 // its sensor array and its log, in one JSON file:
 //   {"sites": [{"name": "A12-north", "road": "a12n.crg", "sensors": "76,1.5,16", "log": "a12n.csv"},
 //              ...]}
+// A site may also give "calibration": one gain per sensor, in sensor order, each in [0.5, 2]: that
+// sensor reports gain x the true impact factor (a WIM operator's calibration factors), and a fit or
+// stream divides it out of every record of the site before the fleet sees it.
 // Paths are relative to the manifest's folder (absolute ones are kept); a road may also be a
 // preset name (AS1, AS2, AS3). The vehicle constants (m1, c_b, c_t, envelopment) belong to the
 // fleet, not to a site, so they stay command-line options shared by every site.
@@ -25,6 +28,8 @@ struct ManifestSite {
   std::string sensors;  // FIRST_M,SPACING_M,COUNT, as --sensors reads it
   std::string log;      // the WIM log's path, resolved against the manifest's folder; "" if not given
                         // (a stream's manifest: its one input names each record's site)
+  std::vector<double> calibration;  // one gain per sensor (empty: every gain 1); the count is checked
+                                    // against the sensors where the site is built
   std::size_t index = 0;  // its place in the manifest (fields are named "sites[index].key")
 };
 
@@ -37,6 +42,11 @@ struct SiteManifest {
   // "sites[i].key" for a field of site i, as every message names it.
   static std::string field(const ManifestSite& site, const std::string& key);
 };
+
+// A known calibration gain is a factor on a sensor's reading: outside [0.5, 2] it is a wrong file,
+// not a sensor.
+inline constexpr double kMinCalibrationGain = 0.5;
+inline constexpr double kMaxCalibrationGain = 2.0;
 
 // The largest manifest file read: 16 MiB, some 150,000 sites.
 inline constexpr std::uintmax_t kMaxSiteManifestBytes = 16u << 20;

@@ -7,12 +7,6 @@
 
 namespace ssrfleet::site {
 
-namespace {
-// The most sensors a site may have (README "Input limits"): an MS-WIM array has tens; a log of more
-// would not fit a CSV line's 100,000 fields, and 1e9 positions are 8 GB before anything checks them.
-constexpr int kMaxSensors = 10'000;
-}  // namespace
-
 void SensorArray::validate() const {
   if (count < 1) throw UsageError("sensors: count is " + std::to_string(count) + ", but must be at least 1");
   if (count > kMaxSensors) {

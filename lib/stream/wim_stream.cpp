@@ -60,6 +60,15 @@ WimStream::WimStream(std::vector<StreamSite> sites, StreamOptions options, std::
       reports_(reports),
       cores_(site_pointers(), options_.fit, options_.state_dir) {
   fleet::make_online_fit(site_pointers(), options_.fit);  // UsageError now on bad options, as before classes
+  for (const auto& s : sites_) {
+    if (s.calibration.size() > 0 && s.calibration.size() != s.site->sensors()) {
+      throw UsageError("stream: site '" + s.name + "' has " + std::to_string(s.calibration.size()) + " gains for " +
+                       std::to_string(s.site->sensors()) + " sensors");
+    }
+    if (s.calibration.size() > 0 && !(s.calibration.array() > 0.0).all()) {
+      throw UsageError("stream: site '" + s.name + "': a sensor gain must be positive");
+    }
+  }
   if (options_.state_dir.empty()) throw UsageError("stream: a state directory is required (--state DIR)");
   if (options_.report_every < 0) throw UsageError("stream: --report-every must be >= 0");
   std::error_code ec;
@@ -88,6 +97,33 @@ std::vector<std::string> WimStream::site_names() const {
   return names;
 }
 
+std::vector<std::string> WimStream::site_identities() const {
+  std::vector<std::string> names;
+  for (const auto& s : sites_) {
+    std::ostringstream id;
+    id << s.name;
+    if (s.calibration.size() > 0) {
+      id << " (calibration" << std::setprecision(17);
+      for (Eigen::Index j = 0; j < s.calibration.size(); ++j) id << (j ? "," : " ") << s.calibration[j];
+      id << ")";
+    }
+    names.push_back(id.str());
+  }
+  return names;
+}
+
+std::vector<fleet::SiteCalibration> WimStream::calibration() const {
+  std::vector<fleet::SiteCalibration> out;
+  bool any = false;
+  for (const auto& s : sites_) {
+    const Eigen::VectorXd g = s.calibration.size() > 0 ? s.calibration : Eigen::VectorXd::Ones(s.site->sensors());
+    out.push_back({s.name, std::vector<double>(g.data(), g.data() + g.size()), {}});
+    any = any || s.calibration.size() > 0;
+  }
+  if (!any) out.clear();
+  return out;
+}
+
 std::vector<const site::Site*> WimStream::site_pointers() const {
   std::vector<const site::Site*> p;
   for (const auto& s : sites_) {
@@ -101,6 +137,7 @@ fleet::ClassPosteriors WimStream::posteriors() const {
   fleet::ClassPosteriors classes = cores_.posteriors();
   for (auto& c : classes) {
     for (std::size_t s = 0; s < c.cloud.sites.size() && s < sites_.size(); ++s) c.cloud.sites[s].name = sites_[s].name;
+    c.cloud.calibration = calibration();
   }
   return classes;
 }
@@ -136,7 +173,7 @@ void WimStream::restore_checkpoint(const std::string& checkpoint) {
     state_sites.clear();
     for (std::uint64_t s = 0; s < n; ++s) state_sites.push_back(reader.text("site"));
   }
-  if (state_sites != site_names()) {
+  if (state_sites != site_identities()) {
     const auto list = [](const std::vector<std::string>& names) {
       if (names.size() == 1 && names.front().empty()) return std::string("one site (no manifest)");
       std::string out = "sites ";
@@ -144,7 +181,7 @@ void WimStream::restore_checkpoint(const std::string& checkpoint) {
       return out;
     };
     reader.fail("sites", "the state was made with " + list(state_sites) + "; resume it with the same ones, in the same "
-                         "order (this run has " + list(site_names()) + ")");
+                         "order (this run has " + list(site_identities()) + ")");
   }
   seq_ = reader.value<std::uint64_t>("seq");
   checkpoint_lines_ = reader.value<std::uint64_t>("lines_consumed");
@@ -204,7 +241,7 @@ void WimStream::save_state(const std::string& source, std::size_t lines_consumed
     out.text(source);
     out.text(model_text());
     out.value<std::uint64_t>(sites_.size());
-    for (const auto& site : sites_) out.text(site.name);
+    for (const std::string& site : site_identities()) out.text(site);
     out.value<std::uint64_t>(seq_ + 1);
     out.value<std::uint64_t>(lines_consumed);
     out.value<std::uint64_t>(rejects_bytes_);
@@ -317,6 +354,9 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
     if (absorbed_before.count(record.truck_id)) {
       ++counts.skipped;
       continue;
+    }
+    if (const Eigen::VectorXd& gains = sites_.at(record.site).calibration; gains.size() > 0) {
+      fleet::remove_sensor_gains(record, gains);
     }
     fleet::OnlineFit& core = cores_.core(record.vehicle_class);
     const auto& stage = core.absorb(record);

@@ -92,7 +92,7 @@ class WimStream {
   // progress: one line per truck and per rejected record (nullptr = silent); reports: the SSR
   // tables (stdout in the command).
   WimStream(const site::Site& site, StreamOptions options, std::ostream* progress, std::ostream& reports)
-      : WimStream(std::vector<StreamSite>{{"", &site}}, std::move(options), progress, reports) {}
+      : WimStream(std::vector<StreamSite>{{"", &site, {}}}, std::move(options), progress, reports) {}
   // A stream of several sites, one fleet (README "Many sites"): its input's `site` column names each
   // record's site (io::WimLogReader::set_sites); the sites must outlive the stream. The history's
   // predictions and the --report-every tables are at the first site; posterior.json holds every site
@@ -100,6 +100,10 @@ class WimStream {
   struct StreamSite {
     std::string name;  // the manifest's name ("" for a stream of one site)
     const site::Site* site = nullptr;
+    // The site's sensor gains (the manifest's "calibration"; empty: every gain 1), divided out of
+    // each of its records before the fleet sees it. Part of the site's identity in the state: a
+    // resume with other gains is refused, since the absorbed trucks were corrected with these.
+    Eigen::VectorXd calibration;
   };
   WimStream(std::vector<StreamSite> sites, StreamOptions options, std::ostream* progress, std::ostream& reports);
 
@@ -126,6 +130,10 @@ class WimStream {
 
   std::vector<const site::Site*> site_pointers() const;
   std::vector<std::string> site_names() const;
+  // Each site as the state names it: its name, and its calibration if it has one.
+  std::vector<std::string> site_identities() const;
+  // What posterior.json records of the sites' calibrations (empty when no site has one).
+  std::vector<fleet::SiteCalibration> calibration() const;
   // The cores' posteriors with the sites' names (a stream of several sites).
   fleet::ClassPosteriors posteriors() const;
 
