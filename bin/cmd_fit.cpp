@@ -24,6 +24,7 @@ int run_fit(int argc, const char* const argv[]) {
   FitFlags fit;
   bool quiet = false, fhwa = false, calibrate = false;
   int calibration_rounds = discrepancy::CalibrationOptions{}.max_rounds;
+  std::string calibrated_manifest;
   SiteFlags site_flags;
   po::options_description desc("fit options");
   desc.add_options()
@@ -38,6 +39,9 @@ int run_fit(int argc, const char* const argv[]) {
        "README \"Sensor calibration\")")
       ("calibration-rounds", po::value(&calibration_rounds)->default_value(calibration_rounds),
        "with --calibrate: the most fits the EM runs (it stops when no gain moves by 0.3 of its standard error)")
+      ("write-manifest", po::value(&calibrated_manifest),
+       "with --calibrate: write the manifest again with each site's fitted gains as its calibration (paths made "
+       "absolute), for stream --sites")
       ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
       ("out,o", po::value(&out)->default_value(out), "posterior file to write (JSON)")
       ("method", po::value(&method)->default_value(method), "smc (sequential, default) or mcmc (the paper's batch baseline)")
@@ -79,7 +83,9 @@ int run_fit(int argc, const char* const argv[]) {
     refuse_beside_sites(vm, {"log", "road", "sensors"});
     if (site_name.empty()) {
       if (calibration_rounds < 1) throw UsageError("--calibration-rounds must be at least 1");
-      fit_manifest_sites({manifest_path, out, method, seed, quiet, calibrate, calibration_rounds}, fit, site_flags, limits);
+      if (!calibrated_manifest.empty() && !calibrate) throw UsageError("--write-manifest writes fitted gains: add --calibrate");
+      fit_manifest_sites({manifest_path, out, method, seed, quiet, calibrate, calibration_rounds, calibrated_manifest}, fit,
+                         site_flags, limits);
       return 0;
     }
     if (calibrate) {

@@ -1,12 +1,14 @@
 #include "fit_sites.hpp"
 
 #include <chrono>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <optional>
 
 #include "fleet/joint_sites.hpp"
 #include "io/site_manifest.hpp"
+#include "road/surface_presets.hpp"
 #include "smc/engine.hpp"
 #include "util/errors.hpp"
 
@@ -77,6 +79,19 @@ fleet::PosteriorCloud calibrate_sensors(const JointFitRequest& request, const Fi
   return done.fit->cloud();
 }
 
+// --write-manifest: the manifest with the fitted gains, its paths absolute (it may go to any folder).
+void write_calibrated_manifest(const std::string& path, io::SiteManifest manifest,
+                               const std::vector<fleet::SiteCalibration>& calibration) {
+  namespace fs = std::filesystem;
+  for (std::size_t s = 0; s < manifest.sites.size(); ++s) {
+    io::ManifestSite& site = manifest.sites[s];
+    if (!road::is_preset_name(site.road)) site.road = fs::absolute(site.road).lexically_normal().string();
+    if (!site.log.empty()) site.log = fs::absolute(site.log).lexically_normal().string();
+    site.calibration = calibration[s].gain;
+  }
+  io::write_site_manifest(path, manifest);
+}
+
 }  // namespace
 
 void fit_manifest_sites(const JointFitRequest& request, const FitFlags& fit, const SiteFlags& site_flags,
@@ -124,6 +139,7 @@ void fit_manifest_sites(const JointFitRequest& request, const FitFlags& fit, con
   std::optional<fleet::PosteriorCloud> calibrated;
   if (request.calibrate) {
     calibrated = calibrate_sensors(request, fit, manifest, site_ptrs, records, calibration, progress);
+    if (!request.calibrated_manifest.empty()) write_calibrated_manifest(request.calibrated_manifest, manifest, calibration);
   } else if (!any_known) {
     calibration.clear();
   }

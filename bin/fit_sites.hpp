@@ -22,6 +22,9 @@ struct JointFitRequest {
   // at most `calibration_rounds` fits, starting from the manifest's calibrations.
   bool calibrate = false;
   int calibration_rounds = discrepancy::CalibrationOptions{}.max_rounds;
+  // With calibrate: a copy of the manifest with each site's fitted gains as its calibration (paths
+  // made absolute), for a stream (`stream --sites`) that goes on from the batch fit. "" = none.
+  std::string calibrated_manifest;
 };
 
 // Reads the manifest, every site's road and log (errors name the manifest, the site and the field,

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <map>
 #include <sstream>
 #include <string>
@@ -16,6 +17,7 @@
 #include "fleet/posterior_summary.hpp"
 #include "io/csv_reader.hpp"
 #include "io/posterior_json.hpp"
+#include "io/site_manifest.hpp"
 #include "model/fleet_model.hpp"
 #include "test_support.hpp"
 
@@ -442,7 +444,10 @@ TEST_CASE("fit --sites --calibrate fits every site's sensor gains and records th
           "[cli][sites][calibration]") {
   TwoSites s;
   const std::string out = s.dir.file("cal.json");
-  const auto r = run_ssrfleet("fit --sites " + q(s.manifest) + " --calibrate --calibration-rounds 2 --particles 64 --seed 3 --out " + q(out),
+  const std::string written = s.dir.file("calibrated/m.json");
+  std::filesystem::create_directories(s.dir.file("calibrated"));
+  const auto r = run_ssrfleet("fit --sites " + q(s.manifest) + " --calibrate --calibration-rounds 2 --particles 64 --seed 3 --out " +
+                                  q(out) + " --write-manifest " + q(written),
                               s.dir);
   INFO(r.err);
   REQUIRE(r.status == 0);
@@ -460,12 +465,20 @@ TEST_CASE("fit --sites --calibrate fits every site's sensor gains and records th
       CHECK(std::abs(c.gain[j] - 1.0) < 5.0 * c.se[j]);
     }
   }
+  // The manifest written again, in another folder, with the fitted gains: a stream's starting point.
+  const io::SiteManifest again = io::read_site_manifest(written);
+  REQUIRE(again.sites.size() == 2);
+  for (std::size_t k = 0; k < 2; ++k) CHECK(again.sites[k].calibration == cloud.calibration[k].gain);
+  CHECK(again.sites[0].road == "AS1");
+  CHECK(again.sites[1].sensors == "70,2,8");
+  CHECK(again.sites[0].log == s.dir.file("a.csv"));  // absolute, so it still names the log
   const auto usage = [&](const std::string& args, const std::string& says) {
     const auto u = run_ssrfleet("fit " + args + " --particles 64 --quiet --out " + q(s.dir.file("x.json")), s.dir);
     INFO(args << ": " << u.err);
     CHECK(u.status == 64);
     CHECK(u.err.find(says) != std::string::npos);
   };
+  usage("--sites " + q(s.manifest) + " --write-manifest " + q(s.dir.file("w.json")), "add --calibrate");
   usage("--sites " + q(s.manifest) + " --site north --calibrate", "drop --site");
   usage(q(s.dir.file("a.csv")) + " --calibrate", "needs --sites");
   usage("--sites " + q(s.manifest) + " --calibrate --checkpoint " + q(s.dir.file("ck")), "--checkpoint with --calibrate");

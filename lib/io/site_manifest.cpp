@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/atomic_file.hpp"
 #include "records/vehicle_class.hpp"
 #include "road/surface_presets.hpp"
 #include "util/errors.hpp"
@@ -121,6 +122,17 @@ SiteManifest read_site_manifest(std::istream& in, const std::string& path, const
     m.sites.push_back(std::move(s));
   }
   return m;
+}
+
+void write_site_manifest(const std::string& path, const SiteManifest& manifest) {
+  nlohmann::json sites = nlohmann::json::array();
+  for (const ManifestSite& s : manifest.sites) {
+    nlohmann::json e = {{"name", s.name}, {"road", s.road}, {"sensors", s.sensors}};
+    if (!s.log.empty()) e["log"] = s.log;
+    if (!s.calibration.empty()) e["calibration"] = s.calibration;
+    sites.push_back(std::move(e));
+  }
+  write_file_atomically(path, [&](std::ostream& os) { os << nlohmann::json{{"sites", sites}}.dump(1) << "\n"; });
 }
 
 SiteManifest read_site_manifest(const std::string& path) {

@@ -51,6 +51,10 @@ inline constexpr double kMaxCalibrationGain = 2.0;
 // The largest manifest file read: 16 MiB, some 150,000 sites.
 inline constexpr std::uintmax_t kMaxSiteManifestBytes = 16u << 20;
 
+// Writes a manifest that read_site_manifest reads back to the same sites (each path as it is in
+// `manifest`: make them absolute first if the file goes to another folder), atomically.
+void write_site_manifest(const std::string& path, const SiteManifest& manifest);
+
 // Reads and checks a manifest. Any problem is a DataError naming the manifest, the field
 // ("sites[2].log") and, where one is known, the site ("site 'B': no file ..."); a missing manifest
 // is a MissingInputError.
