@@ -74,6 +74,9 @@ int run_fit(int argc, const char* const argv[]) {
     throw UsageError("--method mcmc runs on one process; only the SMC's marginal core spreads over MPI ranks");
   }
 
+  if (!calibrate && !calibrated_manifest.empty()) throw UsageError("--write-manifest writes fitted gains: add --calibrate");
+  if (!calibrate && !vm["calibration-rounds"].defaulted()) throw UsageError("--calibration-rounds needs --calibrate");
+
   io::WimLimits limits;
   limits.fhwa_classes = fhwa;
   // A site of a manifest brings its own log, road and sensors; the vehicle constants stay options.
@@ -83,7 +86,6 @@ int run_fit(int argc, const char* const argv[]) {
     refuse_beside_sites(vm, {"log", "road", "sensors"});
     if (site_name.empty()) {
       if (calibration_rounds < 1) throw UsageError("--calibration-rounds must be at least 1");
-      if (!calibrated_manifest.empty() && !calibrate) throw UsageError("--write-manifest writes fitted gains: add --calibrate");
       fit_manifest_sites({manifest_path, out, method, seed, quiet, calibrate, calibration_rounds, calibrated_manifest}, fit,
                          site_flags, limits);
       return 0;

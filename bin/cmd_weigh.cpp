@@ -10,6 +10,7 @@
 #include "fleet/vehicle_classes.hpp"
 #include "io/force_log.hpp"
 #include "io/posterior_json.hpp"
+#include "io/site_manifest.hpp"
 #include "io/static_weights_csv.hpp"
 #include "site/road_source.hpp"
 #include "util/errors.hpp"
@@ -64,7 +65,15 @@ int run_weigh(int argc, const char* const argv[]) {
   require_fitted_site(cloud, posterior_path, site, "; weigh needs the road and site options the posterior was fitted with");
   auto records = io::read_force_log_file(log_path, site.sensors(), "(--sensors " + site_flags.sensors + ")");
   // A site whose sensors the fit calibrated (README "Sensor calibration"): its forces read gain x the
-  // true ones, which is divided out here as the fit divided it out of the impact factors.
+  // true ones, which is divided out here as the fit divided it out of the impact factors. The gains
+  // are the posterior's (the manifest's as the fit read them, or fitted); a manifest that calibrates
+  // the site beside a posterior fitted without would correct the forces and not the fleet: refused.
+  if (!where.site_name.empty() && cloud.calibration.empty() &&
+      !io::read_site_manifest(where.manifest_path).find(where.site_name).calibration.empty()) {
+    throw UsageError("site '" + where.site_name + "' has a calibration in the manifest '" + where.manifest_path +
+                     "', but the posterior in '" + posterior_path + "' was fitted without one: fit it again with "
+                     "this manifest");
+  }
   if (cloud.calibration.size() == 1) {
     const std::vector<double>& gain = cloud.calibration.front().gain;
     if (gain.size() != static_cast<std::size_t>(site.sensors())) {

@@ -8,6 +8,7 @@
 
 #include "fleet/joint_sites.hpp"
 #include "io/site_manifest.hpp"
+#include "process_ranks.hpp"
 #include "road/surface_presets.hpp"
 #include "smc/engine.hpp"
 #include "util/errors.hpp"
@@ -28,6 +29,10 @@ fleet::PosteriorCloud calibrate_sensors(const JointFitRequest& request, const Fi
       throw UsageError("--calibrate: the logs have a class column; a sensor's gain is the site's, not a class's, "
                        "and one fleet model of every class would bias it: calibrate on an unlabelled log");
     }
+  }
+  if (process_ranks().size() > 1) {
+    throw UsageError("--calibrate runs on one process: its latent draws need every truck's table (drop mpirun, or "
+                     "fit the gains first and give them to the ranks' fit in the manifest's calibration)");
   }
   if (!fit.checkpoint_dir.empty()) {
     throw UsageError("--checkpoint with --calibrate: each round refits corrected data, which a checkpoint of the "
@@ -88,6 +93,15 @@ void write_calibrated_manifest(const std::string& path, io::SiteManifest manifes
     if (!road::is_preset_name(site.road)) site.road = fs::absolute(site.road).lexically_normal().string();
     if (!site.log.empty()) site.log = fs::absolute(site.log).lexically_normal().string();
     site.calibration = calibration[s].gain;
+    for (std::size_t j = 0; j < site.calibration.size(); ++j) {
+      const double g = site.calibration[j];
+      if (!(g >= io::kMinCalibrationGain && g <= io::kMaxCalibrationGain)) {
+        throw DataError(path, 0, io::SiteManifest::field(site, "calibration") + "[" + std::to_string(j) + "]",
+                        "site '" + site.name + "': the fitted gain " + std::to_string(g) + " of sensor " +
+                            std::to_string(j + 1) + " is outside [0.5, 2], which a manifest does not hold; the "
+                            "posterior was written, the manifest was not (check that sensor)");
+      }
+    }
   }
   io::write_site_manifest(path, manifest);
 }
@@ -139,7 +153,6 @@ void fit_manifest_sites(const JointFitRequest& request, const FitFlags& fit, con
   std::optional<fleet::PosteriorCloud> calibrated;
   if (request.calibrate) {
     calibrated = calibrate_sensors(request, fit, manifest, site_ptrs, records, calibration, progress);
-    if (!request.calibrated_manifest.empty()) write_calibrated_manifest(request.calibrated_manifest, manifest, calibration);
   } else if (!any_known) {
     calibration.clear();
   }
@@ -153,6 +166,10 @@ void fit_manifest_sites(const JointFitRequest& request, const FitFlags& fit, con
                         cloud.calibration = calibration;
                         return cloud;
                       });
+  if (request.calibrate && !request.calibrated_manifest.empty()) {
+    write_calibrated_manifest(request.calibrated_manifest, manifest, calibration);
+    if (progress) *progress << "ssrfleet fit: the manifest with the fitted gains -> " << request.calibrated_manifest << "\n";
+  }
   if (progress) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     *progress << "ssrfleet fit: done in " << std::fixed << std::setprecision(1) << s << " s -> " << request.out << "\n";

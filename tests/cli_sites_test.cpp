@@ -425,10 +425,20 @@ TEST_CASE("a manifest's known sensor calibration is divided out of its site's re
     CHECK(w.status == 0);
     return w.out;
   };
+  const std::string calibrated_manifest = test::read_text(s.manifest);
+  s.write_manifest("76,1.5,16");  // the same sites without a calibration
   const std::string clean_weights = weigh(s.dir.file("forces.csv"), clean);
   CHECK(std::count(clean_weights.begin(), clean_weights.end(), '\n') == 4);
-  CHECK(weigh(s.dir.file("forces-gained.csv"), corrected) == clean_weights);
   CHECK(weigh(s.dir.file("forces-gained.csv"), clean) != clean_weights);
+  test::write_text(s.manifest, calibrated_manifest);
+  CHECK(weigh(s.dir.file("forces-gained.csv"), corrected) == clean_weights);
+  // A manifest that calibrates the site beside a posterior fitted without: the forces would be
+  // corrected and the fleet not.
+  const auto mixed = run_ssrfleet("weigh " + q(s.dir.file("forces-gained.csv")) + " --posterior " + q(clean) + " --sites " +
+                                      q(s.manifest) + " --site north --draws 10 --trucks-per-draw 10 --quiet",
+                                  s.dir);
+  CHECK(mixed.status == 64);
+  CHECK(mixed.err.find("fitted without one") != std::string::npos);
 
   // A calibration of another sensor count is named by manifest, site and field.
   manifest_with("[1, 1.02]");
@@ -479,6 +489,8 @@ TEST_CASE("fit --sites --calibrate fits every site's sensor gains and records th
     CHECK(u.err.find(says) != std::string::npos);
   };
   usage("--sites " + q(s.manifest) + " --write-manifest " + q(s.dir.file("w.json")), "add --calibrate");
+  usage("--sites " + q(s.manifest) + " --site north --write-manifest " + q(s.dir.file("w.json")), "add --calibrate");
+  usage("--sites " + q(s.manifest) + " --calibration-rounds 3", "needs --calibrate");
   usage("--sites " + q(s.manifest) + " --site north --calibrate", "drop --site");
   usage(q(s.dir.file("a.csv")) + " --calibrate", "needs --sites");
   usage("--sites " + q(s.manifest) + " --calibrate --checkpoint " + q(s.dir.file("ck")), "--checkpoint with --calibrate");

@@ -3,7 +3,8 @@
 #   1. mpirun -np 1, 2 and 4 of ssrfleet-mpi fit --sites M write the very posterior file of the
 #      single-process ssrfleet fit --sites M (byte for byte);
 #   2. a run that loses a rank (kill -9 of one rank's process) after a checkpoint resumes on
-#      another number of ranks (4) to that same file.
+#      another number of ranks (4) to that same file;
+#   3. commands that do not spread over ranks, and fit --calibrate, refuse several ranks by name.
 # usage: mpi_fit_test.sh SSRFLEET SSRFLEET_MPI
 set -euo pipefail
 single=$1
@@ -59,3 +60,11 @@ if mpirun -np 2 --oversubscribe "$multi" predict --posterior single.json > /dev/
 fi
 grep -q "only fit spreads over MPI ranks" refused.err || fail "predict on 2 ranks did not say why"
 echo "ok: predict on 2 ranks is refused by name"
+
+# fit --calibrate draws every truck's latents from its table, which one rank alone holds: refused.
+status=0
+mpirun -np 2 --oversubscribe "$multi" fit --sites m.json --calibrate --particles 256 --quiet --out cal.json \
+  > /dev/null 2> calibrate.err || status=$?
+[[ $status -eq 64 ]] || fail "fit --calibrate on 2 ranks exited $status, not 64"
+grep -q "runs on one process" calibrate.err || fail "fit --calibrate on 2 ranks did not say why"
+echo "ok: fit --calibrate on 2 ranks is refused by name"

@@ -82,7 +82,7 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
       for (int tries = 0; step == 0 && tries < 1000 && !in_support(cand); ++tries) cand = proposal[t].draw(rng[t]);
       admissible[t] = in_support(cand);
       if (step == 0 && !admissible[t]) {
-        throw NumericalError("posterior checks: truck " + std::to_string(i + 1) +
+        throw NumericalError("latent draws: truck " + std::to_string(trucks[t] + 1) +
                              "'s table proposes no admissible latents");
       }
       y[t] = cand;
