@@ -3,7 +3,6 @@
 // (a Slurm array task), and a bad manifest entry named by manifest, site and field.
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
@@ -19,6 +18,7 @@
 #include "io/posterior_json.hpp"
 #include "io/site_manifest.hpp"
 #include "model/fleet_model.hpp"
+#include "gained_log.hpp"
 #include "test_support.hpp"
 
 using namespace ssrfleet;
@@ -339,41 +339,7 @@ TEST_CASE("sites --check writes a row per site with its conflict p-value and nam
   CHECK(one.err.find("has one site") != std::string::npos);
 }
 
-namespace {
-// A copy of a simulated log whose if_j (or force_j) columns are multiplied by gains[j - 1], printed
-// to round-trip.
-void write_gained_log(const std::string& from, const std::string& to, const std::vector<double>& gains,
-                      const std::string& prefix = "if_") {
-  std::istringstream in(test::read_text(from));
-  std::string line, out;
-  std::vector<std::string> header;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') {
-      out += line + "\n";
-      continue;
-    }
-    std::vector<std::string> fields;
-    std::stringstream ss(line);
-    for (std::string f; std::getline(ss, f, ',');) fields.push_back(f);
-    if (header.empty()) {
-      header = fields;
-      out += line + "\n";
-      continue;
-    }
-    for (std::size_t c = 0; c < fields.size(); ++c) {
-      if (header[c].rfind(prefix, 0) != 0) continue;
-      const std::size_t j = std::stoul(header[c].substr(prefix.size())) - 1;
-      char buf[40];
-      std::snprintf(buf, sizeof buf, "%.17g", std::stod(fields[c]) * gains.at(j));
-      fields[c] = buf;
-    }
-    std::string joined;
-    for (std::size_t c = 0; c < fields.size(); ++c) joined += (c ? "," : "") + fields[c];
-    out += joined + "\n";
-  }
-  test::write_text(to, out);
-}
-}  // namespace
+using test::write_gained_log;
 
 TEST_CASE("a manifest's known sensor calibration is divided out of its site's records before the fit",
           "[cli][sites][calibration]") {

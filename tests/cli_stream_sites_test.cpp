@@ -4,7 +4,6 @@
 // site written before states named their sites.
 #include <algorithm>
 #include <cstdint>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <optional>
@@ -18,6 +17,7 @@
 #include "io/csv_reader.hpp"
 #include "io/history_db.hpp"
 #include "io/posterior_json.hpp"
+#include "gained_log.hpp"
 #include "test_support.hpp"
 #include "util/binary_io.hpp"
 
@@ -345,21 +345,11 @@ TEST_CASE("a stream divides a site's known calibration out of its records, and r
   REQUIRE(s.stream(straight, s.input(s.lines, "clean.csv")).status == 0);
   // North's sensor 3 read double and its sensor 7 half (exact in binary: the corrected records are
   // the clean ones' bits), as the manifest's calibration says.
-  std::vector<std::string> gained;
-  const auto north = TwoSiteStream::records_of(s.dir.file("a.csv"), "north", 16);
-  for (const std::string& line : north) {
-    std::vector<std::string> f;
-    std::stringstream ss(line);
-    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", std::stod(f[4 + 2]) * 2.0);
-    f[4 + 2] = buf;
-    std::snprintf(buf, sizeof buf, "%.17g", std::stod(f[4 + 6]) * 0.5);
-    f[4 + 6] = buf;
-    std::string joined;
-    for (std::size_t c = 0; c < f.size(); ++c) joined += (c ? "," : "") + f[c];
-    gained.push_back(joined);
-  }
+  std::vector<double> north(16, 1.0);
+  north[2] = 2.0;
+  north[6] = 0.5;
+  test::write_gained_log(s.dir.file("a.csv"), s.dir.file("a-gained.csv"), north);
+  const auto gained = TwoSiteStream::records_of(s.dir.file("a-gained.csv"), "north", 16);
   std::vector<std::string> lines = s.lines;
   for (std::size_t i = 0; i < gained.size(); ++i) lines[2 * i] = gained[i];  // north's records come first in each pair
   const auto manifest_with = [&](const std::string& calibration) {
