@@ -9,13 +9,14 @@
 
 namespace ssrfleet::bench {
 
-// The 1-minute load average from /proc/loadavg, or -1 when unreadable.
-// The resident set (VmRSS, kB) of a process ("self" or a pid) from /proc; -1 if unreadable.
-inline long resident_kb(const std::string& process = "self") {
+// A kB field of a process's /proc/PID/status ("self" or a pid), e.g. "VmRSS" (the resident set),
+// "RssAnon" (its private part), "RssFile" (mapped file pages: page cache the kernel may drop),
+// "RssShmem"; -1 if unreadable.
+inline long status_kb(const std::string& process, const std::string& field) {
   std::ifstream status("/proc/" + process + "/status");
   std::string key;
   while (status >> key) {
-    if (key == "VmRSS:") {
+    if (key == field + ":") {
       long kb = 0;
       status >> kb;
       return kb;
@@ -24,6 +25,11 @@ inline long resident_kb(const std::string& process = "self") {
   }
   return -1;
 }
+
+// The resident set (VmRSS, kB) of a process ("self" or a pid) from /proc; -1 if unreadable.
+inline long resident_kb(const std::string& process = "self") { return status_kb(process, "VmRSS"); }
+
+// The 1-minute load average from /proc/loadavg, or -1 when unreadable.
 
 inline double load_average_1min() {
   std::ifstream f("/proc/loadavg");

@@ -45,7 +45,7 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
   const auto n = static_cast<Eigen::Index>(trucks.size());
   const int M = site.sensors();
   for (const std::size_t t : trucks) {
-    if (t >= static_cast<std::size_t>(target.trucks()) || target.observed_if()[t].size() != M) {
+    if (t >= static_cast<std::size_t>(target.trucks()) || target.absorbed().impact_factors(t).size() != M) {
       throw std::logic_error("draw_truck_latents: truck " + std::to_string(t) + " is not one of this site's");
     }
   }
@@ -61,8 +61,8 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
     const std::size_t t = trucks[static_cast<std::size_t>(i)];
     rng.push_back(streams.stream(static_cast<std::uint64_t>(t)));
     proposal.emplace_back(target.tables().view(t), target.marginal(), theta);
-    batch.speed_mps[i] = target.speed_mps()[t];
-    batch.sprung_mass_kg[i] = target.sprung_mass_kg()[t];
+    batch.speed_mps[i] = target.absorbed().speed_mps(t);
+    batch.sprung_mass_kg[i] = target.absorbed().sprung_mass_kg(t);
   }
   std::vector<model::TruckLatent> x(static_cast<std::size_t>(n)), y(static_cast<std::size_t>(n));
   std::vector<double> log_p(static_cast<std::size_t>(n), kNegInf), log_q(static_cast<std::size_t>(n));
@@ -96,7 +96,7 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
       const auto t = static_cast<std::size_t>(i);
       if (step > 0) ++proposals;
       if (!admissible[t]) continue;
-      const double lp = log_target(target.observed_if()[trucks[t]], g.col(i), y[t], theta, range);
+      const double lp = log_target(target.absorbed().impact_factors(trucks[t]), g.col(i), y[t], theta, range);
       const double lq = proposal[t].log_density(y[t]);
       bool take = step == 0;
       if (!take) {
@@ -132,9 +132,9 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::MarginalSmc&
   out.sprung_mass_kg.resize(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto t = static_cast<std::size_t>(i);
-    out.observed.col(i) = target.observed_if()[t];
-    out.speed_mps[i] = target.speed_mps()[t];
-    out.sprung_mass_kg[i] = target.sprung_mass_kg()[t];
+    out.observed.col(i) = target.absorbed().impact_factors(t);
+    out.speed_mps[i] = target.absorbed().speed_mps(t);
+    out.sprung_mass_kg[i] = target.absorbed().sprung_mass_kg(t);
   }
   const smc::RngFactory root = smc::RngFactory(o.seed).child(0x636865636bULL /* "check" */);
   smc::Rng pick = root.child(0).stream(0);

@@ -29,7 +29,7 @@ std::vector<SensorGains> estimate_sensor_gains(const fleet::MarginalSmc& fit, co
   const auto& sites = target.sites();
   // Each site's trucks, in truck order.
   std::vector<std::vector<std::size_t>> trucks_of(sites.size());
-  for (std::size_t t = 0; t < static_cast<std::size_t>(target.trucks()); ++t) trucks_of[target.truck_sites()[t]].push_back(t);
+  for (std::size_t t = 0; t < static_cast<std::size_t>(target.trucks()); ++t) trucks_of[target.absorbed().site(t)].push_back(t);
 
   const smc::RngFactory root = smc::RngFactory(o.seed).child(0x63616c6962ULL /* "calib" */);
   smc::Rng pick = root.child(0).stream(0);
@@ -54,7 +54,7 @@ std::vector<SensorGains> estimate_sensor_gains(const fleet::MarginalSmc& fit, co
         const TruckLatentDraws drawn = draw_truck_latents(
             *sites[s], target, theta, root.child(1 + s, static_cast<std::uint64_t>(d)), o.mh_steps, trucks_of[s]);
         for (std::size_t i = 0; i < trucks_of[s].size(); ++i) {
-          const Eigen::VectorXd& y = target.observed_if()[trucks_of[s][i]];
+          const auto y = target.absorbed().impact_factors(trucks_of[s][i]);
           const auto mu = drawn.model_if.col(static_cast<Eigen::Index>(i));
           out.y_mu.array() += y.array() * mu.array();
           out.mu_mu.array() += mu.array().square();

@@ -25,7 +25,8 @@ MarginalSmc::MarginalSmc(std::vector<const site::Site*> sites, Options options)
       options_(std::move(options)),
       target_(sites_, with_particles(options_.target, options_.sampler.particles)),
       sampler_(options_.sampler),
-      parallel_(options_.sampler.threads) {
+      parallel_(options_.sampler.threads),
+      truck_ids_(options_.target.table_spill_directory) {
   fingerprint_ = sites_fingerprint(sites_);
   site_trucks_.assign(sites_.size(), 0);
   recent_.assign(sites_.size(), {});
@@ -99,12 +100,14 @@ PosteriorCloud MarginalSmc::cloud() const {
 }
 
 PosteriorCloud MarginalSmc::current_cloud() const {
-  const auto& v = target_.speed_mps();
-  const auto& m = target_.sprung_mass_kg();
+  const AbsorbedTrucks& a = target_.absorbed();
   if (sites_.size() == 1) {
-    const auto from = static_cast<std::ptrdiff_t>(v.size() > kPredictionPool ? v.size() - kPredictionPool : 0);
-    return smc_cloud(*sites_.front(), sampler_, target_.theta(), {v.begin() + from, v.end()},
-                     {m.begin() + from, m.end()}, trucks_seen());
+    std::vector<double> speed, mass;
+    for (std::size_t i = a.size() > kPredictionPool ? a.size() - kPredictionPool : 0; i < a.size(); ++i) {
+      speed.push_back(a.speed_mps(i));
+      mass.push_back(a.sprung_mass_kg(i));
+    }
+    return smc_cloud(*sites_.front(), sampler_, target_.theta(), std::move(speed), std::move(mass), trucks_seen());
   }
   // Each site's most recent trucks (kept as they arrive: a stream asks for the cloud at every
   // checkpoint, so this costs O(pool), not O(n)), site by site.
@@ -115,8 +118,8 @@ PosteriorCloud MarginalSmc::current_cloud() const {
     entries.push_back({"", site.fingerprint(), site.surface().name, site.sensors(), site.lateral_min_m(),
                        site.lateral_max_m(), site_trucks_[s], speed.size(), recent_[s].size()});
     for (const std::size_t i : recent_[s]) {
-      speed.push_back(v[i]);
-      mass.push_back(m[i]);
+      speed.push_back(a.speed_mps(i));
+      mass.push_back(a.sprung_mass_kg(i));
     }
   }
   PosteriorCloud c = smc_cloud(*sites_.front(), sampler_, target_.theta(), std::move(speed), std::move(mass), trucks_seen());
@@ -153,7 +156,7 @@ void MarginalSmc::save_state(BinaryWriter& out) const {
 void MarginalSmc::save_trucks(BinaryWriter& out, std::size_t begin, std::size_t end) const {
   const util::Ranks& ranks = target_.ranks();
   auto record = [&](BinaryWriter& w, std::size_t i) {
-    w.text(truck_ids_[i]);
+    w.text(std::string(truck_ids_[i]));
     target_.save_trucks(w, i, i + 1);
     w.seal();  // each record checked on its own: the truck log is appended to
   };
@@ -219,8 +222,8 @@ void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {
   drop_pool();
   site_trucks_.assign(sites_.size(), 0);
   recent_.assign(sites_.size(), {});
-  const auto& of = target_.truck_sites();
-  for (std::size_t i = 0; i < of.size(); ++i) note_site(of[i], i);
+  const AbsorbedTrucks& a = target_.absorbed();
+  for (std::size_t i = 0; i < a.size(); ++i) note_site(a.site(i), i);
   sampler_.restore(state);
 }
 

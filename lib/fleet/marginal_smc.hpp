@@ -17,6 +17,7 @@
 #include "records/wim_record.hpp"
 #include "site/site.hpp"
 #include "smc/engine.hpp"
+#include "util/spill_strings.hpp"
 
 namespace ssrfleet::fleet {
 
@@ -79,7 +80,8 @@ class MarginalSmc {
   // current weighted particles (current_cloud()).
   PosteriorCloud cloud() const;
   PosteriorCloud current_cloud() const;
-  const std::deque<std::string>& truck_ids() const { return truck_ids_; }
+  // The absorbed trucks' ids, in order (in the tables' spill directory when they have one).
+  const util::SpillStringList& truck_ids() const { return truck_ids_; }
   // What the last absorb() rebuilt, if anything ("" = nothing).
   const std::string& last_rebuild() const { return last_rebuild_; }
 
@@ -116,7 +118,7 @@ class MarginalSmc {
   MarginalTarget target_;
   smc::TemperedSampler sampler_;
   smc::ParallelFor parallel_;
-  std::deque<std::string> truck_ids_;
+  util::SpillStringList truck_ids_;
   std::string last_rebuild_;
   // θ after each pooled sweep of the last rejuvenate(), side by side (kHyperCount × sweeps · P;
   // no columns: no pool). A report of the final phase, not state: never checkpointed (a resumed

@@ -105,7 +105,9 @@ MarginalTarget::MarginalTarget(std::vector<const site::Site*> sites, Options opt
     : sites_(std::move(sites)),
       options_(std::move(options)),
       ranks_(options_.ranks != nullptr ? options_.ranks : &util::single_rank()),
-      marginal_(model::FleetMarginal(0, {}, {})) {
+      marginal_(model::FleetMarginal(0, {}, {})),
+      store_(options_.table_spill_directory),
+      absorbed_(options_.table_spill_directory) {
   if (sites_.empty() || std::find(sites_.begin(), sites_.end(), nullptr) != sites_.end()) {
     throw UsageError("MarginalTarget: needs at least one site");
   }
@@ -388,11 +390,7 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
     passes_ += table.passes;
     store_.append(table, site_index);
   }
-  truck_site_.push_back(site_index);
-  speed_mps_.push_back(speed_mps);
-  sprung_mass_kg_.push_back(sprung_mass_kg);
-  observed_if_.push_back(impact_factors);
-  fits_.push_back(fit);
+  absorbed_.push_back(speed_mps, sprung_mass_kg, site_index, impact_factors, fit);
   add_to_width_sums(fit);
   mode_ = Mode::kTruck;
 }
@@ -436,23 +434,27 @@ void MarginalTarget::begin_rebuild(const Eigen::ArrayXd& W, const smc::ParallelF
   const auto global = [&](Eigen::Index k) {
     return static_cast<std::size_t>(ranks_->rank()) + static_cast<std::size_t>(k) * static_cast<std::size_t>(ranks_->size());
   };
-  std::vector<model::TruckTable> tables(static_cast<std::size_t>(local));
   const ScopeTimer timer(table_seconds_);
-  parallel(local, [&](Eigen::Index begin, Eigen::Index end) {
-    for (Eigen::Index k = begin; k < end; ++k) {
-      const std::size_t u = global(k);
-      tables[static_cast<std::size_t>(k)] = model::build_truck_table(site_of(truck_site_[u]), speed_mps_[u], sprung_mass_kg_[u],
-                                                                     observed_if_[u], ideal.lattice, o, fits_[u]);
+  // Built in batches, each appended to the new store before the next is built, so a rebuild holds
+  // at most a batch of tables besides the stores (a spilled store keeps memory flat through it).
+  model::TableStore fresh(store_.spill_directory());
+  std::vector<model::TruckTable> tables;
+  for (Eigen::Index from = 0; from < local; from += kRebuildBatch) {
+    const Eigen::Index batch = std::min(kRebuildBatch, local - from);
+    tables.assign(static_cast<std::size_t>(batch), model::TruckTable{});
+    parallel(batch, [&](Eigen::Index begin, Eigen::Index end) {
+      for (Eigen::Index k = begin; k < end; ++k) {
+        const std::size_t u = global(from + k);
+        tables[static_cast<std::size_t>(k)] =
+            model::build_truck_table(site_of(absorbed_.site(u)), absorbed_.speed_mps(u), absorbed_.sprung_mass_kg(u),
+                                     absorbed_.impact_factors(u), ideal.lattice, o, absorbed_.fit(u));
+      }
+    });
+    for (Eigen::Index k = 0; k < batch; ++k) {
+      const model::TruckTable& t = tables[static_cast<std::size_t>(k)];
+      fresh.append(t, absorbed_.site(global(from + k)));
+      passes_ += t.passes - t.fit.passes;
     }
-  });
-  model::TableStore fresh;
-  std::size_t nodes = 0;
-  for (const auto& t : tables) nodes += t.nodes();
-  fresh.reserve(tables.size(), nodes);
-  for (Eigen::Index k = 0; k < local; ++k) {
-    const model::TruckTable& t = tables[static_cast<std::size_t>(k)];
-    fresh.append(t, truck_site_[global(k)]);
-    passes_ += t.passes - t.fit.passes;
   }
   old_store_ = std::move(store_);
   old_marginal_ = marginal_;
@@ -530,7 +532,7 @@ void MarginalTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen:
                                     const smc::ParallelFor& parallel) {
   const Eigen::Index P = options_.particles;
   const auto count = static_cast<std::size_t>(P);
-  const std::size_t n = speed_mps_.size();
+  const std::size_t n = absorbed_.size();
   const std::size_t local = store_.trucks();
   const bool newest_mine = n > 0 && ranks_->owns(n - 1);
   const std::pair<std::size_t, std::size_t> slice = ranks_->slice(count);

@@ -30,6 +30,7 @@
 
 #include <Eigen/Core>
 
+#include "fleet/absorbed_trucks.hpp"
 #include "model/fleet_model.hpp"
 #include "util/binary_io.hpp"
 #include "model/fleet_marginal.hpp"
@@ -108,6 +109,10 @@ class MarginalTarget final : public smc::TemperedModel {
     // seed gives the same bits for any R. The newest truck's table goes to every rank, and each
     // computes its ℓ for a slice of the particles. The ranks must call every member in the same order.
     const util::Ranks* ranks = nullptr;
+    // Where the absorbed trucks' tables live: "" in memory; a directory, in an unnamed file there
+    // that the kernel pages (model/table_store.hpp), so the process's own memory stays flat as the
+    // trucks grow (a stream puts them in its state directory). The same bits either way.
+    std::string table_spill_directory;
   };
 
   struct TableSettings {
@@ -153,7 +158,7 @@ class MarginalTarget final : public smc::TemperedModel {
   // After every stage: folds the stage's increment into log γ (the target becomes idle).
   void finish_stage();
 
-  Eigen::Index trucks() const { return static_cast<Eigen::Index>(speed_mps_.size()); }
+  Eigen::Index trucks() const { return static_cast<Eigen::Index>(absorbed_.size()); }
   const Eigen::MatrixXd& theta() const { return theta_; }  // 7 x P
   const TableSettings& settings() const { return settings_; }
   // The tables of this rank's trucks, in truck order (every truck's with one rank).
@@ -168,11 +173,8 @@ class MarginalTarget final : public smc::TemperedModel {
   }
   long lateral_checked() const { return lateral_checked_; }
   const model::FleetMarginal& marginal() const { return marginal_; }
-  const std::vector<double>& speed_mps() const { return speed_mps_; }
-  const std::vector<double>& sprung_mass_kg() const { return sprung_mass_kg_; }
-  const std::vector<Eigen::VectorXd>& observed_if() const { return observed_if_; }
-  // Each truck's site, in truck order (indexes sites()).
-  const std::vector<std::uint32_t>& truck_sites() const { return truck_site_; }
+  // Every truck's data and fit, in truck order (its site indexes sites()).
+  const AbsorbedTrucks& absorbed() const { return absorbed_; }
   const std::vector<const site::Site*>& sites() const { return sites_; }
   // Integrator passes spent on this rank's tables (all of them with one rank).
   long long integrator_passes() const { return passes_; }
@@ -216,6 +218,8 @@ class MarginalTarget final : public smc::TemperedModel {
 
  private:
   enum class Mode { kIdle, kTruck, kCorrection };
+  // A rebuild builds this many tables at a time (about 5 MB of them on AS1's 16 sensors).
+  static constexpr Eigen::Index kRebuildBatch = 1024;
   HyperVector theta_of(Eigen::Index p) const;
   // The table option max_piece_sd_m the cloud implies (Options::lateral_piece_fraction).
   double max_piece_sd(const Eigen::ArrayXd& W) const;
@@ -255,10 +259,7 @@ class MarginalTarget final : public smc::TemperedModel {
 
   // Every truck's data and fit, on every rank (the lattice follows the fits' widths; a rebuild
   // reads the data of the rank's own trucks); the tables in store_ are this rank's trucks' only.
-  std::vector<double> speed_mps_, sprung_mass_kg_;
-  std::vector<std::uint32_t> truck_site_;
-  std::vector<Eigen::VectorXd> observed_if_;
-  std::vector<model::TruckFit> fits_;
+  AbsorbedTrucks absorbed_;
   // Σ_i log of each fit's likelihood sd per unit σ (k and k_t), in truck order: the geometric mean
   // that sets the lattice spacing, kept as it grows so the per-truck settings cost O(1), not O(n).
   double sum_log_sd_k_ = 0.0, sum_log_sd_kt_ = 0.0;

@@ -58,7 +58,7 @@ void MarginalTarget::save_particles(BinaryWriter& out) const {
   }
   out.matrix(theta_);
   out.matrix(base_sum_.matrix());
-  out.value<std::uint64_t>(speed_mps_.size());
+  out.value<std::uint64_t>(absorbed_.size());
 }
 
 // A truck's fit is written as its bytes: it must have no padding, whose bytes are indeterminate.
@@ -69,11 +69,11 @@ void MarginalTarget::save_trucks(BinaryWriter& out, std::size_t begin, std::size
   for (std::size_t i = begin; i < end; ++i) {
     // A truck's record holds its table, which only its own rank keeps (MarginalSmc gathers them).
     if (!ranks_->owns(i)) throw std::logic_error("MarginalTarget::save_trucks: truck " + std::to_string(i) + " is another rank's");
-    out.value<std::uint32_t>(truck_sites()[i]);
-    out.value(speed_mps_[i]);
-    out.value(sprung_mass_kg_[i]);
-    out.matrix(observed_if_[i]);
-    out.value(fits_[i]);
+    out.value<std::uint32_t>(absorbed_.site(i));
+    out.value(absorbed_.speed_mps(i));
+    out.value(absorbed_.sprung_mass_kg(i));
+    out.matrix(absorbed_.impact_factors(i));
+    out.value(absorbed_.fit(i));
     const model::TableView v = store_.view(i / static_cast<std::size_t>(ranks_->size()));
     out.value<std::uint32_t>(static_cast<std::uint32_t>(v.nodes));
     out.value(v.u_ref);
@@ -142,15 +142,11 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
     in.fail("frozen until", "truck " + std::to_string(frozen_until_) + " is not within a span of truck " +
                                 std::to_string(n));
   }
-  speed_mps_.clear();
-  sprung_mass_kg_.clear();
-  observed_if_.clear();
-  truck_site_.clear();
-  fits_.clear();
   sum_log_sd_k_ = sum_log_sd_kt_ = 0.0;
   // Nothing is sized by n: it is not checked (its seal comes after the truck records), and up to 1e8
   // it would reserve 2 GB for a state of a few bytes. The store grows as records are read.
-  store_ = model::TableStore{};
+  store_ = model::TableStore(options_.table_spill_directory);
+  absorbed_ = AbsorbedTrucks(options_.table_spill_directory);
   marginal_ = make_marginal(settings_.lattice);
   loaded_version_ = version;
   mode_ = Mode::kIdle;
@@ -166,13 +162,11 @@ void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
       in.fail("truck site", "site " + std::to_string(site) + " of a state with " + std::to_string(sites_.size()) +
                                 " site(s)");
     }
-    const std::uint64_t truck = speed_mps_.size();
-    truck_site_.push_back(site);
-    speed_mps_.push_back(in.value<double>("truck speed"));
-    sprung_mass_kg_.push_back(in.value<double>("truck mass"));
-    observed_if_.push_back(in.matrix("impact factors", site_of(site).sensors(), 1));
-    fits_.push_back(in.value<model::TruckFit>("truck fit"));
-    add_to_width_sums(fits_.back());
+    const std::uint64_t truck = absorbed_.size();
+    const auto speed = in.value<double>("truck speed");
+    const auto mass = in.value<double>("truck mass");
+    const Eigen::VectorXd impact_factors = in.matrix("impact factors", site_of(site).sensors(), 1);
+    const auto fit = in.value<model::TruckFit>("truck fit");
     model::TruckTable t;
     const auto nodes = in.value<std::uint32_t>("table nodes");
     if (nodes > 1'000'000) in.fail("table nodes", "implausible node count " + std::to_string(nodes));
@@ -188,9 +182,11 @@ void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
     read(t.b, "table b");
     read(t.z_mean_m, "table z mean");
     read(t.z_var_m2, "table z var");
-    if (!(t.u_ref > 0.0) || !std::isfinite(speed_mps_.back()) || !std::isfinite(sprung_mass_kg_.back())) {
+    if (!(t.u_ref > 0.0) || !std::isfinite(speed) || !std::isfinite(mass)) {
       in.fail("truck", "a truck record holds impossible values");
     }
+    absorbed_.push_back(speed, mass, site, impact_factors, fit);
+    add_to_width_sums(fit);
     if (ranks_->owns(truck)) store_.append(t, site);  // another rank's table is read past
   }
 }

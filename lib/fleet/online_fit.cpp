@@ -19,7 +19,8 @@ class CoreFit : public OnlineFit {
   void rejuvenate(int sweeps) override { smc_.rejuvenate(sweeps); }
   PosteriorCloud cloud() const override { return smc_.cloud(); }
   long trucks_seen() const override { return smc_.trucks_seen(); }
-  const std::deque<std::string>& truck_ids() const override { return smc_.truck_ids(); }
+  std::size_t truck_id_count() const override { return smc_.truck_ids().size(); }
+  std::string truck_id(std::size_t i) const override { return std::string(smc_.truck_ids()[i]); }
   const smc::TemperedSampler& sampler() const override { return smc_.sampler(); }
   void save(BinaryWriter& out) const override { smc_.save(out); }
   void restore(BinaryReader& in) override { smc_.restore(in); }

@@ -36,7 +36,9 @@ class OnlineFit {
   virtual void rejuvenate(int sweeps) = 0;
   virtual PosteriorCloud cloud() const = 0;
   virtual long trucks_seen() const = 0;
-  virtual const std::deque<std::string>& truck_ids() const = 0;
+  // The ids of the trucks absorbed, in order (the latent core with a window keeps the last ones only).
+  virtual std::size_t truck_id_count() const = 0;
+  virtual std::string truck_id(std::size_t i) const = 0;
   virtual const smc::TemperedSampler& sampler() const = 0;
   virtual void save(BinaryWriter& out) const = 0;
   virtual void restore(BinaryReader& in) = 0;

@@ -145,16 +145,17 @@ std::size_t read_fit_checkpoint(const std::string& path, fleet::OnlineFit& fit,
     refuse(records.size(), "the checkpoint holds " + std::to_string(n) + " trucks, the log " +
                                std::to_string(records.size()));
   }
-  const auto& ids = fit.truck_ids();
-  for (std::size_t i = 0; i < n && i < ids.size(); ++i) {
-    if (ids[i] != records[i].truck_id) refuse(i, "id '" + ids[i] + "' against the log's '" + records[i].truck_id + "'");
+  for (std::size_t i = 0; i < n && i < fit.truck_id_count(); ++i) {
+    const std::string id = fit.truck_id(i);
+    if (id != records[i].truck_id) refuse(i, "id '" + id + "' against the log's '" + records[i].truck_id + "'");
   }
   if (const fleet::MarginalSmc* m = fit.marginal()) {
     const auto& t = m->target();
     for (std::size_t i = 0; i < n; ++i) {
       const auto& r = records[i];
-      if (t.truck_sites()[i] != r.site || t.speed_mps()[i] != r.speed_mps || t.sprung_mass_kg()[i] != r.sprung_mass_kg ||
-          t.observed_if()[i] != r.impact_factor) {
+      const fleet::AbsorbedTrucks& a = t.absorbed();
+      if (a.site(i) != r.site || a.speed_mps(i) != r.speed_mps || a.sprung_mass_kg(i) != r.sprung_mass_kg ||
+          a.impact_factors(i).size() != r.impact_factor.size() || a.impact_factors(i) != r.impact_factor) {
         refuse(i, "its data differ from the log's");
       }
     }

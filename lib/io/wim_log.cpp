@@ -64,6 +64,11 @@ WimLogReader::WimLogReader(std::istream& in, std::string source_name, double uns
   sensors_ = static_cast<int>(value_cols_.size());
 }
 
+void WimLogReader::keep_ids_in(const std::string& directory) {
+  if (seen_.size() > 0) throw std::logic_error("WimLogReader::keep_ids_in: ids were seen already");
+  seen_ = util::SpillStringSet(directory);
+}
+
 void WimLogReader::set_sites(std::vector<LogSite> sites) {
   const std::string& src = csv_.source_name();
   if (site_col_ < 0) {
@@ -106,7 +111,7 @@ records::WimRecord WimLogReader::parse(const CsvRow& row) const {
     sensors = it->sensors;
     r.truck_id = name + ":" + r.truck_id;  // ids are per site
   }
-  if (seen_.count(r.truck_id)) throw DataError(src, row.line, "truck_id", "duplicate truck_id '" + r.truck_id + "'");
+  if (seen_.contains(r.truck_id)) throw DataError(src, row.line, "truck_id", "duplicate truck_id '" + r.truck_id + "'");
   if (class_col_ >= 0) {
     const std::string& label = row.fields[static_cast<std::size_t>(class_col_)];
     if (!records::is_class_label(label)) {

@@ -15,7 +15,6 @@
 #include <ostream>
 #include <set>
 #include <string>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -23,6 +22,7 @@
 
 #include "io/csv_reader.hpp"
 #include "records/wim_record.hpp"
+#include "util/spill_strings.hpp"
 
 namespace ssrfleet::io {
 
@@ -70,6 +70,10 @@ class WimLogReader {
   // Truck ids the reader treats as already absorbed (e.g. after a resume): a later record with
   // one of these ids is rejected as a duplicate.
   void mark_seen(const std::string& truck_id) { seen_.insert(truck_id); }
+  // Keeps the ids seen in spill files in `directory` ("": in memory, the default), so a long
+  // stream's memory does not grow with them (util/spill_strings.hpp). Before the first record
+  // (std::logic_error after one); IoError if no file can be made there.
+  void keep_ids_in(const std::string& directory);
   void set_follow(bool follow) { csv_.set_follow(follow); }
   // The only classes accepted (empty = any label): a record of another class is rejected, field
   // `class` (a stream whose classes were fixed when its state was made).
@@ -102,7 +106,7 @@ class WimLogReader {
   std::vector<std::string> value_names_;
   int sensors_ = 0;
   bool forces_ = false;
-  std::unordered_set<std::string> seen_;
+  util::SpillStringSet seen_;
   std::set<std::string> classes_;
   long site_col_ = -1;
   std::vector<LogSite> sites_;  // empty: a log of one site

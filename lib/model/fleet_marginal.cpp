@@ -115,12 +115,12 @@ void FleetMarginal::add_log_likelihoods(const TableStore& store, std::size_t end
                                         std::size_t count, util::ExactSum* sums) const {
   for (std::size_t p = 0; p < count; ++p)
     if (!terms[p].inside) sums[p].add(kNegInf);
-  const auto& offset = store.columns().offset;
+  const auto offset = [&store](std::size_t i) { return store.node_offset(i); };
   std::size_t first = 0;
   while (first < end) {
     // The block: trucks [first, last) holding about kBlockEntries entries (at least one truck).
     std::size_t last = first + 1;
-    while (last < end && offset[last] - offset[first] < kBlockEntries) ++last;
+    while (last < end && offset(last) - offset(first) < kBlockEntries) ++last;
     for (std::size_t p = 0; p < count; ++p) {
       util::ExactSum& s = sums[p];
       for (std::size_t i = first; i < last && !s.settled(); ++i) s.add(log_likelihood(store.view(i), terms[p]));

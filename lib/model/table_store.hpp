@@ -1,12 +1,21 @@
-// Every absorbed truck's table (truck_table.hpp) in contiguous arrays, one per field, so the sum
-// Σ_i ℓ_i(θ) that every θ move evaluates streams through memory once instead of chasing a heap
-// allocation per truck. Append-only; a rebuild fills a new store.
+// Every absorbed truck's table (truck_table.hpp) in one append-only arena, truck after truck, so
+// the sum Σ_i ℓ_i(θ) that every θ move evaluates streams through memory once instead of chasing a
+// heap allocation per truck. A truck's record is its nodes' seven fields, each contiguous
+// (k_index, kt_index, c, m, b, z_mean_m, z_var_m2: 28 bytes a node, every field 4-byte aligned).
+//
+// The arena and the per-truck index live in the process's memory, or, given a directory, in
+// unnamed files there that the kernel pages (util/spill_vector.hpp): a stream's tables grow by
+// about 4.7 kB a truck, and in files they leave the process's private memory flat (README "Load
+// with bad records"). Append-only; a rebuild fills a new store.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "model/truck_table.hpp"
+#include "util/spill_vector.hpp"
 
 namespace ssrfleet::model {
 
@@ -29,27 +38,42 @@ TableView view_of(const TruckTable& table);
 
 class TableStore {
  public:
+  static constexpr std::size_t kBytesPerNode = 2 * sizeof(std::int32_t) + 5 * sizeof(float);
+
+  // In memory.
+  TableStore() = default;
+  // In unnamed files in `spill_directory` ("": in memory). IoError if a file cannot be made.
+  explicit TableStore(const std::string& spill_directory);
+
+  // Appends a truck's table (IoError from a full disk: the store is then as it was).
   void append(const TruckTable& table, std::uint32_t site = 0);
-  std::size_t trucks() const { return cols_.offset.size(); }
+  std::size_t trucks() const { return index_.size(); }
+  // Valid until the next append.
   TableView view(std::size_t truck) const;
-  std::size_t nodes() const { return cols_.c.size(); }
-  std::size_t bytes() const;
+  std::size_t nodes() const { return index_.empty() ? 0 : index_.back().offset + index_.back().count; }
+  // The first node of a truck (FleetMarginal blocks its sums by it).
+  std::uint64_t node_offset(std::size_t truck) const { return index_[truck].offset; }
+  // Bytes held in the process's memory (0 when spilled).
+  std::size_t bytes() const { return arena_.memory_bytes() + index_.memory_bytes(); }
+  // Bytes in the spill files (0 in memory).
+  std::size_t spilled_bytes() const {
+    return spilled() ? arena_.size() + index_.size() * sizeof(Entry) : 0;
+  }
+  bool spilled() const { return arena_.spilled(); }
+  // The directory a spilled store's files are in ("" in memory): a rebuild's new store goes there too.
+  const std::string& spill_directory() const { return arena_.directory(); }
   void reserve(std::size_t trucks, std::size_t nodes);
 
-  // Raw fields, for checkpoints.
-  struct Columns {
-    std::vector<std::int32_t> k_index, kt_index;
-    std::vector<float> c, m, b, z_mean_m, z_var_m2;
-    std::vector<std::uint64_t> offset;
-    std::vector<std::uint32_t> count;
-    std::vector<double> u_ref;
-    std::vector<std::uint32_t> site;
-  };
-  Columns& columns() { return cols_; }
-  const Columns& columns() const { return cols_; }
-
  private:
-  Columns cols_;
+  struct Entry {
+    std::uint64_t offset = 0;  // first node
+    double u_ref = 0.0;
+    std::uint32_t count = 0;   // nodes
+    std::uint32_t site = 0;
+  };
+  util::SpillVector<std::byte> arena_;  // the records, truck after truck
+  util::SpillVector<Entry> index_;      // one entry a truck
+  std::vector<std::byte> record_;      // scratch: the record being appended
 };
 
 }  // namespace ssrfleet::model

@@ -61,9 +61,10 @@ long ClassCores::trucks_seen() const {
   return n;
 }
 
-std::vector<std::string> ClassCores::truck_ids() const {
-  std::vector<std::string> ids;
-  for (const auto& [label, c] : cores_) ids.insert(ids.end(), c.fit->truck_ids().begin(), c.fit->truck_ids().end());
+util::SpillStringSet ClassCores::truck_ids(const std::string& spill_directory) const {
+  util::SpillStringSet ids(spill_directory);
+  for (const auto& [label, c] : cores_)
+    for (std::size_t i = 0; i < c.fit->truck_id_count(); ++i) ids.insert(c.fit->truck_id(i));
   return ids;
 }
 

@@ -23,6 +23,7 @@
 #include "fleet/vehicle_classes.hpp"
 #include "site/site.hpp"
 #include "util/binary_io.hpp"
+#include "util/spill_strings.hpp"
 
 namespace ssrfleet::stream {
 
@@ -41,7 +42,8 @@ class ClassCores {
   // The core of `label`, made on first use with the seed fleet::class_seed(seed, label).
   fleet::OnlineFit& core(const std::string& label);
   long trucks_seen() const;
-  std::vector<std::string> truck_ids() const;
+  // Every class's absorbed truck ids, as a set in spill files in `spill_directory` ("": in memory).
+  util::SpillStringSet truck_ids(const std::string& spill_directory) const;
   std::string labels() const;  // "A, B" for messages
   std::string warning() const;  // every class's warning, prefixed with its label when labelled
   fleet::ClassPosteriors posteriors() const;

@@ -8,7 +8,6 @@
 #include <iomanip>
 #include <sstream>
 #include <thread>
-#include <unordered_set>
 
 #include "fleet/posterior_summary.hpp"
 #include "io/atomic_file.hpp"
@@ -16,6 +15,7 @@
 #include "io/wim_log.hpp"
 #include "io/write_faults.hpp"
 #include "stream/history_rows.hpp"
+#include "util/free_memory.hpp"
 #include "util/binary_io.hpp"
 #include "util/errors.hpp"
 
@@ -50,6 +50,17 @@ fleet::ClassPosteriors at_first_site(fleet::ClassPosteriors classes) {
 constexpr std::uint64_t kStreamMagic = 0x4d52545346525353ULL;       // "SSRFSTRM"
 constexpr std::uint32_t kStreamVersion = 5;
 constexpr std::uint64_t kOldCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
+// How often (in trucks) a stream hands the heap's free pages back (a few ms on a 30 MB heap).
+constexpr long kTrimEvery = 256;
+
+// The cores' options: the marginal core's tables grow by about 4.7 kB a truck; in an unnamed file
+// in the state directory (model/table_store.hpp) they leave the stream's own memory flat.
+fleet::OnlineFitOptions fit_options(const StreamOptions& o) {
+  fleet::OnlineFitOptions fit = o.fit;
+  if (!o.tables_in_memory) fit.marginal.target.table_spill_directory = o.state_dir;
+  return fit;
+}
+
 }  // namespace
 
 WimStream::WimStream(std::vector<StreamSite> sites, StreamOptions options, std::ostream* progress, std::ostream& reports)
@@ -58,7 +69,7 @@ WimStream::WimStream(std::vector<StreamSite> sites, StreamOptions options, std::
       options_(std::move(options)),
       progress_(progress),
       reports_(reports),
-      cores_(site_pointers(), options_.fit, options_.state_dir) {
+      cores_(site_pointers(), fit_options(options_), options_.state_dir) {
   fleet::make_online_fit(site_pointers(), options_.fit);  // UsageError now on bad options, as before classes
   for (const auto& s : sites_) {
     if (s.calibration.size() > 0 && s.calibration.size() != s.site->sensors()) {
@@ -315,8 +326,12 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
   reader.set_classes(cores_.fixed());
   reader.set_follow(options_.follow);
   const bool same_source = resumed_ && source == checkpoint_source_;
-  const std::vector<std::string> ids_before = cores_.truck_ids();
-  const std::unordered_set<std::string> absorbed_before(ids_before.begin(), ids_before.end());
+  // The ids absorbed before this run (a resume skips their records), and every id the reader has
+  // seen (a duplicate is rejected): both grow with the trucks, so both live in spill files in the
+  // state directory, like the tables, unless --tables-in-memory.
+  const std::string spill_directory = options_.tables_in_memory ? std::string() : options_.state_dir;
+  const util::SpillStringSet absorbed_before = cores_.truck_ids(spill_directory);
+  reader.keep_ids_in(spill_directory);
 
   const std::string rejects_path = path_in(options_.state_dir, "rejects.csv");
   std::ofstream rejects(rejects_path, std::ios::app | std::ios::binary);
@@ -351,7 +366,7 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
       if (progress_) *progress_ << "stream: rejected " << why.message << "\n";
       continue;
     }
-    if (absorbed_before.count(record.truck_id)) {
+    if (absorbed_before.contains(record.truck_id)) {
       ++counts.skipped;
       continue;
     }
@@ -362,6 +377,9 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
     const auto& stage = core.absorb(record);
     ++counts.absorbed;
     save_state(source, line);
+    // Every so many trucks the heap's free pages go back to the kernel (util/free_memory.hpp), so
+    // the resident set follows the memory in use, which does not grow with the trucks.
+    if (cores_.trucks_seen() % kTrimEvery == 0) util::return_free_memory();
     if (progress_) {
       *progress_ << "stream: truck " << cores_.trucks_seen() << " " << record.truck_id << " (line " << line << ")"
                  << (record.vehicle_class.empty() ? "" : " class " + record.vehicle_class) << ": "
