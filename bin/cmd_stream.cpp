@@ -66,8 +66,8 @@ int run_stream(int argc, const char* const argv[]) {
        "bounded memory on the latent core: keep and move only the last W trucks' latents, older ones as sufficient "
        "statistics (0 = the default exact marginal core, whose memory per truck is a table of a few KB)")
       ("tables-in-memory", po::bool_switch(&options.tables_in_memory),
-       "keep the marginal core's truck tables in memory (about 4.7 KB a truck) instead of an unnamed file in the state "
-       "directory that the kernel pages, which keeps the stream's own memory flat; same results")
+       "keep the marginal core's truck tables, the trucks' data and their ids in memory (about 5 KB a truck) instead of "
+       "unnamed files in the state directory that the kernel pages, which keep the stream's own memory flat; same results")
       ("classes", po::value(&classes_text),
        "fix the vehicle classes of a new state, e.g. A,B (default: each new label in the class column starts a class of "
        "its own); a record of another class is quarantined in rejects.csv (field class); a resume keeps the state's list")

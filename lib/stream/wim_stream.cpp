@@ -50,11 +50,12 @@ fleet::ClassPosteriors at_first_site(fleet::ClassPosteriors classes) {
 constexpr std::uint64_t kStreamMagic = 0x4d52545346525353ULL;       // "SSRFSTRM"
 constexpr std::uint32_t kStreamVersion = 5;
 constexpr std::uint64_t kOldCheckpointMagic = 0x54504b4346525353ULL;  // "SSRFCKPT"
-// How often (in trucks) a stream hands the heap's free pages back (a few ms on a 30 MB heap).
+// How often (in trucks) a stream hands the heap's free pages back: one walk of a heap of some tens
+// of MB per 256 trucks, each of which takes tens of milliseconds.
 constexpr long kTrimEvery = 256;
 
-// The cores' options: the marginal core's tables grow by about 4.7 kB a truck; in an unnamed file
-// in the state directory (model/table_store.hpp) they leave the stream's own memory flat.
+// The cores' options: the marginal core's tables, data and ids grow by about 5 kB a truck; in
+// unnamed files in the state directory (model/table_store.hpp) they leave the stream's own memory flat.
 fleet::OnlineFitOptions fit_options(const StreamOptions& o) {
   fleet::OnlineFitOptions fit = o.fit;
   if (!o.tables_in_memory) fit.marginal.target.table_spill_directory = o.state_dir;

@@ -77,9 +77,9 @@ struct StreamOptions {
   // The prediction each checkpoint's history row set holds: lighter than a report's, since it runs
   // after every truck (about 2,000 passes per class; history_rows.hpp).
   predict::PredictionOptions history_prediction{.theta_draws = 50, .trucks_per_draw = 40};
-  // The marginal core keeps its truck tables in an unnamed file in the state directory, paged by
-  // the kernel (model/table_store.hpp), so the stream's private memory stays flat; true keeps them
-  // in the process's memory (about 4.7 kB a truck on AS1). The same bits either way.
+  // The marginal core keeps its truck tables, the trucks' data and ids in unnamed files in the state
+  // directory, paged by the kernel (model/table_store.hpp), so the stream's private memory stays
+  // flat; true keeps them in the process's memory (about 5 kB a truck on AS1). The same bits.
   bool tables_in_memory = false;
 };
 
