@@ -73,23 +73,27 @@ void SpillFile::release() noexcept {
   size_ = 0;
 }
 
-void SpillFile::append(const void* bytes, std::size_t n) {
-  if (n == 0) return;
-  if (fd_ < 0) throw IoError("spill file: append to a closed file");
+// Writes all n bytes at `offset`, or returns why not.
+std::string SpillFile::write_all(std::size_t offset, const void* bytes, std::size_t n) const {
   const auto* p = static_cast<const char*>(bytes);
   std::size_t done = 0;
   while (done < n) {
-    const ::ssize_t w = ::pwrite(fd_, p + done, n - done, static_cast<::off_t>(size_ + done));
+    const ::ssize_t w = ::pwrite(fd_, p + done, n - done, static_cast<::off_t>(offset + done));
     if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) {
-      const std::string why = w < 0 ? errno_text() : std::string("no progress");
-      // Cut a partial write back, so the file holds exactly size_ bytes.
-      if (::ftruncate(fd_, static_cast<::off_t>(size_)) != 0) {
-        // The tail past size_ is never read; nothing more to do.
-      }
-      throw IoError(directory_ + ": writing a spill file failed: " + why);
-    }
+    if (w <= 0) return w < 0 ? errno_text() : std::string("no progress");
     done += static_cast<std::size_t>(w);
+  }
+  return {};
+}
+
+void SpillFile::append(const void* bytes, std::size_t n) {
+  if (n == 0) return;
+  if (fd_ < 0) throw IoError("spill file: append to a closed file");
+  if (const std::string why = write_all(size_, bytes, n); !why.empty()) {
+    // Cut a partial write back, so the file holds exactly size_ bytes (if that fails too, the tail
+    // past size_ is never read and the next append overwrites it).
+    [[maybe_unused]] const int rc = ::ftruncate(fd_, static_cast<::off_t>(size_));
+    throw IoError(directory_ + ": writing a spill file failed: " + why);
   }
   map_at_least(size_ + n);
   size_ += n;
@@ -97,14 +101,8 @@ void SpillFile::append(const void* bytes, std::size_t n) {
 
 void SpillFile::write_at(std::size_t offset, const void* bytes, std::size_t n) {
   if (offset + n > size_) throw std::logic_error("SpillFile::write_at: past the end");
-  const auto* p = static_cast<const char*>(bytes);
-  std::size_t done = 0;
-  while (done < n) {
-    const ::ssize_t w = ::pwrite(fd_, p + done, n - done, static_cast<::off_t>(offset + done));
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) throw IoError(directory_ + ": writing the spill file failed: " + (w < 0 ? errno_text() : "no progress"));
-    done += static_cast<std::size_t>(w);
-  }
+  if (const std::string why = write_all(offset, bytes, n); !why.empty())
+    throw IoError(directory_ + ": writing a spill file failed: " + why);
 }
 
 void SpillFile::shrink_to(std::size_t bytes) {

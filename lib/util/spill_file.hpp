@@ -42,6 +42,7 @@ class SpillFile {
 
  private:
   void map_at_least(std::size_t bytes);
+  std::string write_all(std::size_t offset, const void* bytes, std::size_t n) const;
   void release() noexcept;
 
   std::string directory_;
