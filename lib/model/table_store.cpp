@@ -21,11 +21,6 @@ TableView view_of(const TruckTable& t) {
 
 TableStore::TableStore(const std::string& spill_directory) : arena_(spill_directory), index_(spill_directory) {}
 
-void TableStore::reserve(std::size_t trucks, std::size_t nodes) {
-  arena_.reserve(nodes * kBytesPerNode);
-  index_.reserve(trucks);
-}
-
 void TableStore::append(const TruckTable& t, std::uint32_t site) {
   const std::size_t n = t.nodes();
   record_.resize(n * kBytesPerNode);

@@ -62,7 +62,6 @@ class TableStore {
   bool spilled() const { return arena_.spilled(); }
   // The directory a spilled store's files are in ("" in memory): a rebuild's new store goes there too.
   const std::string& spill_directory() const { return arena_.directory(); }
-  void reserve(std::size_t trucks, std::size_t nodes);
 
  private:
   struct Entry {

@@ -44,9 +44,6 @@ class SpillVector {
     size_ = n;
   }
   void clear() { truncate(0); }
-  void reserve(std::size_t n) {
-    if (!file_.is_open()) memory_.reserve(n);
-  }
 
   // The file holds nothing but T's from a page-aligned mapping, so every element is aligned.
   const T* data() const { return file_.is_open() ? reinterpret_cast<const T*>(file_.data()) : memory_.data(); }
