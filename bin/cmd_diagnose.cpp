@@ -22,7 +22,7 @@ int run_diagnose(int argc, const char* const argv[]) {
   std::string log_path, road = "AS1", json_path, out_dir, seed_text = "1", candidates, posterior_path;
   discrepancy::DiagnoseOptions o;
   int threads = 0;
-  bool quiet = false, no_plots = false;
+  bool quiet = false, no_plots = false, refit_from_prior = false;
   SiteFlags site_flags;
   std::string catalogue;
   for (const auto& name : fleet::extension_names()) {
@@ -51,6 +51,9 @@ int run_diagnose(int argc, const char* const argv[]) {
        "effects added at most: after each, diagnose checks again and looks for the next while a check fails")
       ("shortlist-only", po::bool_switch(&o.shortlist_only),
        "refit only candidates that a failed check points at (faster; misses effects the checks cannot see)")
+      ("refit-from-prior", po::bool_switch(&refit_from_prior),
+       "refit candidates drawing each new truck from the fleet prior, not from its table in the base fit "
+       "(the older, slower path; for comparison)")
       ("draws", po::value(&o.draws)->default_value(o.draws), "posterior draws behind the checks")
       ("no-plots", po::bool_switch(&no_plots), "write the gnuplot scripts but do not run gnuplot")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
@@ -73,6 +76,7 @@ int run_diagnose(int argc, const char* const argv[]) {
       if (!name.empty()) o.candidates.push_back(name);
     }
   }
+  o.refit_from_tables = !refit_from_prior;
   o.validate();
   const site::Site site(site::load_road(road, &std::cerr), site_flags.to_options());
   for (const auto& name : o.candidates) fleet::make_extension(name, site);  // unknown names fail before any work

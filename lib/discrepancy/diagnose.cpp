@@ -12,6 +12,7 @@
 
 #include "discrepancy/marginal_draws.hpp"
 #include "discrepancy/posterior_draws.hpp"
+#include "fleet/new_truck_proposals.hpp"
 #include "fleet/online_fit.hpp"
 #include "fleet/replay.hpp"
 #include "model/model_extension.hpp"
@@ -39,8 +40,11 @@ struct Fitted {
   const fleet::FleetSmc& smc() const { return *online->latent(); }
 };
 
+// The fit of one model. An extension's refit takes its new trucks' latents from `proposals` (the
+// base fit's tables) when given, and runs no final sweeps: finish() runs them on the one chosen.
 Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& records, std::size_t heldout_from,
-                 std::unique_ptr<fleet::ModelExtension> extension, const DiagnoseOptions& o) {
+                 std::unique_ptr<fleet::ModelExtension> extension, const fleet::NewTruckProposals* proposals,
+                 const DiagnoseOptions& o) {
   Fitted f;
   f.extension = std::move(extension);
   fleet::OnlineFitOptions so;
@@ -49,11 +53,12 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
   so.sampler().threads = o.threads;
   so.sampler().seed = o.seed;
   so.latent.extension = f.extension.get();
+  so.latent.proposals = f.extension ? proposals : nullptr;
   f.online = fleet::make_online_fit(site, so);
   const std::string label = f.extension ? f.extension->name() : std::string("base model");
   const auto start = Clock::now();
   fleet::ReplayOptions replay;  // the stages, then the same final sweeps as `fit` on that core
-  replay.final_sweeps = o.final_sweeps;
+  replay.final_sweeps = f.extension ? 0 : o.final_sweeps;
   replay.after_record = [&](std::size_t t, const smc::StageSummary& stage, const fleet::OnlineFit&) {
     if (t >= heldout_from) f.fit.heldout_log_score += stage.log_evidence_increment;
     if (o.progress && ((t + 1) % 25 == 0 || t + 1 == records.size())) {
@@ -73,6 +78,19 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
   const auto hyper = fleet::summarise_cloud(f.online->cloud());
   std::copy(hyper.begin(), hyper.end(), f.fit.hyper.begin());
   return f;
+}
+
+// The final sweeps of a refit that was chosen (fit_model skipped them), as `fit` runs them.
+void finish(Fitted& f, const DiagnoseOptions& o) {
+  if (!f.extension) return;
+  const int sweeps = o.final_sweeps >= 0 ? o.final_sweeps : f.online->sampler().options().schedule.final_sweeps;
+  if (sweeps == 0) return;
+  const auto start = Clock::now();
+  f.online->rejuvenate(sweeps);
+  f.fit.wall_s += seconds_since(start);
+  f.fit.integrator_passes = f.online->latent()->target().integrator_passes();
+  const auto hyper = fleet::summarise_cloud(f.online->cloud());
+  std::copy(hyper.begin(), hyper.end(), f.fit.hyper.begin());
 }
 
 std::vector<ParameterEstimate> extension_estimates(const Fitted& f) {
@@ -151,7 +169,8 @@ struct Round {
 
 Round next_effect(const site::Site& site, const std::vector<records::WimRecord>& records, std::size_t heldout_from,
                   const Fitted& current, const std::string& spec, std::vector<std::string> names,
-                  const CheckReport& checks, const DiagnoseOptions& o, const std::function<void(const std::string&)>& say) {
+                  const CheckReport& checks, const fleet::NewTruckProposals* proposals, const DiagnoseOptions& o,
+                  const std::function<void(const std::string&)>& say) {
   Round out;
   // The shortlist first (a stable order otherwise), so progress shows the likeliest first.
   std::map<std::string, bool> shortlisted;
@@ -174,7 +193,7 @@ Round next_effect(const site::Site& site, const std::vector<records::WimRecord>&
     }
     const std::string model = spec.empty() ? name : spec + "+" + name;
     say("refitting with " + model);
-    Fitted f = fit_model(site, records, heldout_from, fleet::parse_model_spec(model, site).extension, o);
+    Fitted f = fit_model(site, records, heldout_from, fleet::parse_model_spec(model, site).extension, proposals, o);
     c.refitted = true;
     c.fit = f.fit;
     c.log_bayes_factor = f.fit.log_evidence - current.fit.log_evidence;
@@ -210,6 +229,8 @@ Round next_effect(const site::Site& site, const std::vector<records::WimRecord>&
   out.log_bayes_factor = pick.log_bayes_factor;
   out.heldout_gain = pick.heldout_gain;
   out.best = std::move(supported[chosen]);
+  say("final sweeps of " + (spec.empty() ? out.effect : spec + "+" + out.effect));
+  finish(out.best, o);
   for (std::size_t k = 0; k < supported.size(); ++k) {
     auto& c = out.candidates[supported_index[k]];
     if (k == chosen) {
@@ -261,7 +282,10 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
   for (const auto& name : names) fleet::make_extension(name, site);  // UsageError on an unknown name
 
   say("fitting the base model (" + std::to_string(o.particles) + " particles)");
-  Fitted base = fit_model(site, records, heldout_from, nullptr, o);
+  const Fitted base = fit_model(site, records, heldout_from, nullptr, nullptr, o);
+  // The base fit's tables propose every refit's new trucks (it outlives them all).
+  const fleet::MarginalTableProposals tables(base.online->marginal()->target());
+  const fleet::NewTruckProposals* proposals = o.refit_from_tables ? &tables : nullptr;
   r.base = base.fit;
   say("posterior predictive checks on the base model");
   r.checks_before = check(site, base, o);
@@ -273,7 +297,8 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
   // one the evidence and held-out skill support, and checks again; later rounds run only while a
   // check still fails (a gap remains).
   std::string spec;  // the current model's effects ("" = base)
-  Fitted current = std::move(base);
+  Fitted extended;   // the model with the effects named so far (online null: the base model)
+  const auto current_fit = [&]() -> const Fitted& { return extended.online ? extended : base; };
   CheckReport current_checks = r.checks_before;
   for (int round = 0; round < o.max_effects; ++round) {
     if (round > 0 && !gap_remains(current_checks, o.alpha)) break;
@@ -283,7 +308,8 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
     }
     if (remaining.empty()) break;
     if (round > 0) say("a gap remains with " + spec + ": looking for another effect");
-    Round next = next_effect(site, records, heldout_from, current, spec, remaining, current_checks, o, say);
+    const auto round_start = Clock::now();
+    Round next = next_effect(site, records, heldout_from, current_fit(), spec, remaining, current_checks, proposals, o, say);
     if (round == 0) {
       r.candidates = next.candidates;
       r.alternatives = next.alternatives;
@@ -291,19 +317,21 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
     DiagnoseStep step;
     step.candidates = std::move(next.candidates);
     if (!next.best.online) {
+      step.wall_s = seconds_since(round_start);
       r.steps.push_back(std::move(step));
       break;
     }
     spec = spec.empty() ? next.effect : spec + "+" + next.effect;
     r.effects.push_back(next.effect);
-    current = std::move(next.best);
+    extended = std::move(next.best);
     say("posterior predictive checks with " + spec);
-    current_checks = check(site, current, o);
+    current_checks = check(site, extended, o);
     step.effect = next.effect;
     step.model = spec;
     step.log_bayes_factor = next.log_bayes_factor;
     step.heldout_gain = next.heldout_gain;
     step.checks = current_checks;
+    step.wall_s = seconds_since(round_start);
     r.steps.push_back(std::move(step));
   }
 
@@ -312,6 +340,7 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
   r.effect = r.effects.empty() ? r.verdict : r.effects.front();
   r.model = spec.empty() ? "base" : spec;
   r.checks_after = current_checks;
+  const Fitted& current = current_fit();
   r.chosen = current.fit;
   r.posterior = current.online->cloud();
   if (current.extension) {

@@ -39,9 +39,15 @@ struct DiagnoseOptions {
   int particles = 512;
   int threads = 1;
   std::uint64_t seed = 1;
-  // Sweeps at phi = 1 after each fit's last truck, as `fit` runs them; -1: the latent core's
-  // schedule (50). The checks then read a posterior of the same quality as `fit --core latent`.
+  // Sweeps at phi = 1 after the last truck of the fit each round ends with (the effect chosen), as
+  // `fit` runs them; -1: the latent core's schedule (50). The checks then read a posterior of the
+  // same quality as `fit --core latent`. The candidates that are not chosen skip them: their
+  // evidence and held-out score come from the stages alone.
   int final_sweeps = -1;
+  // Each candidate's refit draws a new truck's latents from the base fit's table of that truck
+  // (fleet/new_truck_proposals.hpp) and moves the older trucks and ψ only after resampling; false:
+  // from the fleet prior, tempered in with moves after every step (the cost grows like N²).
+  bool refit_from_tables = true;
   double alpha = 0.01;              // a check fails when its predictive p-value is below this
   double min_log_bayes_factor = 3.0;  // log BF an effect needs (3: "strong", Kass & Raftery 1995)
   double holdout_fraction = 0.25;   // the last quarter of the trucks scores held-out skill
@@ -88,6 +94,7 @@ struct DiagnoseStep {
   double log_bayes_factor = 0.0, heldout_gain = 0.0;
   CheckReport checks;  // with `model` (empty when no effect was added)
   std::vector<CandidateResult> candidates;
+  double wall_s = 0.0;  // the round: its refits, the chosen one's final sweeps, its checks
 };
 
 struct DiagnoseResult {

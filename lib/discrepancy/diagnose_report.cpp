@@ -258,7 +258,8 @@ nlohmann::json diagnosis_to_json(const DiagnoseResult& r) {
   nlohmann::json steps = nlohmann::json::array();
   for (const auto& step : r.steps) {
     nlohmann::json e = {{"effect", step.effect.empty() ? nlohmann::json(nullptr) : nlohmann::json(step.effect)},
-                        {"candidates", candidates_json(step.candidates)}};
+                        {"candidates", candidates_json(step.candidates)},
+                        {"wall_s", step.wall_s}};
     if (!step.effect.empty()) {
       e["model"] = step.model;
       e["log_bayes_factor"] = step.log_bayes_factor;

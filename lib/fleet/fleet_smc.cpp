@@ -3,6 +3,7 @@
 #include "fleet/checkpoint_header.hpp"
 #include "fleet/smc_cloud.hpp"
 
+#include <algorithm>
 #include <tuple>
 
 #include "util/errors.hpp"
@@ -16,6 +17,9 @@ FleetTarget::Options target_options(const FleetSmc::Options& o) {
   t.prior = o.prior;
   t.window = o.window;
   t.extension = o.extension;
+  t.proposals = o.proposals;
+  t.proposal_draws = o.proposal_draws;
+  t.every_stage_moves_until = o.every_stage_moves_until;
   return t;
 }
 
@@ -27,6 +31,14 @@ constexpr std::uint64_t kRejuvenationDraws = 2;
 smc::TemperedSampler::Options with_schedule(const FleetSmc::Options& o) {
   smc::TemperedSampler::Options s = o.sampler;
   s.schedule = FleetSmc::move_schedule(o);
+  if (o.proposals != nullptr) {
+    // IBIS: moves only once resampling has duplicated particles. The stage has no random-walk
+    // block then (FleetTarget::blocks), so no jump target ends the sweeps: run as many as the
+    // per-stage counts of the model moves ask for.
+    s.schedule.trigger = smc::MoveSchedule::Trigger::kAfterResampling;
+    s.schedule.min_sweeps = std::min(s.schedule.max_sweeps, std::max({s.schedule.min_sweeps, o.older_sweeps,
+                                                                        o.extension_sweeps, o.extension_jump_sweeps}));
+  }
   return s;
 }
 }  // namespace

@@ -39,6 +39,12 @@ class FleetSmc {
     Eigen::Index window = 0;  // FleetTarget::Options::window: 0 = exact, W = bounded memory
     // FleetTarget::Options::extension: an effect fitted alongside θ (not owned; outlives this).
     const ModelExtension* extension = nullptr;
+    // FleetTarget::Options::proposals: a new truck's latents from its table (new_truck_proposals.hpp;
+    // not owned). With them the moves run only after a step that resampled (IBIS), not after every
+    // tempering step: the stage's weights are then close to the truck's marginal likelihood.
+    const NewTruckProposals* proposals = nullptr;
+    int proposal_draws = 16;             // FleetTarget::Options::proposal_draws
+    int every_stage_moves_until = 25;    // FleetTarget::Options::every_stage_moves_until
     // Runs per stage of "extension random walk", at φ = 1. Three, not two: on a 10 mm bump
     // (diagnose_test) two left the cloud lagging along the length-height ridge, the bump too long
     // and too low, its 95 % interval missing the truth.

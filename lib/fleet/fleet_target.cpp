@@ -35,6 +35,13 @@ FleetTarget::FleetTarget(const site::Site& site, Options options)
   if (options_.extension != nullptr && options_.window > 0) {
     throw UsageError("fleet target: a model extension needs the exact regime (window 0)");
   }
+  if (options_.proposals != nullptr && options_.window > 0) {
+    throw UsageError("fleet target: new-truck proposals need the exact regime (window 0)");
+  }
+  if (!(options_.defensive_share > 0.0 && options_.defensive_share < 1.0)) {
+    throw UsageError("fleet target: the defensive share of a new truck's proposal must be in (0, 1)");
+  }
+  if (options_.proposal_draws < 1) throw UsageError("fleet target: proposal draws must be at least 1");
   theta_.resize(kHyperCount, options_.particles);
   psi_.resize(options_.extension != nullptr ? options_.extension->dim() : 0, options_.particles);
   sums_ = Eigen::MatrixXd::Zero(kSumCount, options_.particles);
@@ -74,6 +81,7 @@ void FleetTarget::initialise(const smc::RngFactory& rngs) {
   pool_speed_mps_.clear();
   pool_sprung_mass_kg_.clear();
   older_scale_.clear();
+  newest_from_proposals_ = false;
 }
 
 void FleetTarget::add_truck(const records::WimRecord& record, const smc::RngFactory& rngs,
@@ -96,24 +104,107 @@ void FleetTarget::add_truck(const records::WimRecord& record, const smc::RngFact
   latents_.conservativeResize(3 * (n + 1), Eigen::NoChange);
   ssr_.conservativeResize(n + 1, Eigen::NoChange);
   const Eigen::Index P = options_.particles;
-  for (Eigen::Index i = 0; i < P; ++i) {
-    smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
-    const HyperVector t = theta_of(i);
-    latents_(3 * n + kStiffness, i) = draw_stiffness(rng, t, psi_.col(i).data());
-    latents_(3 * n + kTyreStiffness, i) = t[kKt] + t[kSigmaKt] * standard_normal(rng);
-    // z ~ N(Z, σ_z²) truncated to the road: the prior box keeps at least ~45 % of the mass on it,
-    // so rejection is cheap.
-    double z = t[kZ] + t[kSigmaZ] * standard_normal(rng);
-    while (z < lateral_.lo_m || z > lateral_.hi_m) z = t[kZ] + t[kSigmaZ] * standard_normal(rng);
-    latents_(3 * n + kLateral, i) = z;
+  newest_from_proposals_ = options_.proposals != nullptr;
+  if (!newest_from_proposals_) {
+    for (Eigen::Index i = 0; i < P; ++i) {
+      smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+      prior_latents(i, rng, latents_.col(i).data() + 3 * n);
+    }
+    Eigen::ArrayXd ssr(P);
+    residuals(n, latents_.middleRows(3 * n, 3), ssr, parallel);
+    ssr_.row(n) = ssr.matrix().transpose();
+  } else {
+    draw_newest_from_proposals(record, rngs, parallel);
   }
-  Eigen::ArrayXd ssr(P);
-  residuals(n, latents_.middleRows(3 * n, 3), ssr, parallel);
-  ssr_.row(n) = ssr.matrix().transpose();
   older_scale_.resize(static_cast<std::size_t>(n), 1.0);  // the truck that was newest joins the older ones
   if (options_.window > 0 && kept_trucks() > options_.window + 1) retire_oldest_kept_truck();
   // The previous newest truck is an older one now: fold it into the running sums.
   for (Eigen::Index i = 0; i < P; ++i) recompute_sums(i);
+}
+
+void FleetTarget::prior_latents(Eigen::Index i, smc::Rng& rng, double* x) const {
+  const HyperVector t = theta_of(i);
+  x[kStiffness] = draw_stiffness(rng, t, psi_.col(i).data());
+  x[kTyreStiffness] = t[kKt] + t[kSigmaKt] * standard_normal(rng);
+  // z ~ N(Z, σ_z²) truncated to the road: the prior box keeps at least ~45 % of the mass on it,
+  // so rejection is cheap.
+  double z = t[kZ] + t[kSigmaZ] * standard_normal(rng);
+  while (z < lateral_.lo_m || z > lateral_.hi_m) z = t[kZ] + t[kSigmaZ] * standard_normal(rng);
+  x[kLateral] = z;
+}
+
+void FleetTarget::draw_newest_from_proposals(const records::WimRecord& record, const smc::RngFactory& rngs,
+                                             const smc::ParallelFor& parallel) {
+  const Eigen::Index P = options_.particles, newest = kept_trucks() - 1, m = options_.proposal_draws;
+  const auto arrival = static_cast<std::size_t>(total_trucks_ - 1);
+  if (!options_.proposals->matches(arrival, record.speed_mps, record.sprung_mass_kg)) {
+    throw UsageError("fleet target: truck '" + record.truck_id + "' (#" + std::to_string(total_trucks_) +
+                     ") is not the truck its proposals were built for (another log, or another order)");
+  }
+  const double log_table_share = std::log1p(-options_.defensive_share), log_prior_share = std::log(options_.defensive_share);
+  Eigen::MatrixXd x(3, P * m);
+  Eigen::ArrayXd log_w(P * m), ssr(P * m), pick(P);
+  newest_log_zhat_.resize(P);
+  // Each particle's proposal depends on its own θ and its draws come from its own stream, and
+  // each chunk simulates its own draws: the split over threads changes nothing.
+  parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
+    std::vector<SsrJob> jobs;
+    for (Eigen::Index i = begin; i < end; ++i) {
+      smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
+      pick[i] = smc::uniform01(rng);
+      const HyperVector t = theta_of(i);
+      const double* psi = psi_.col(i).data();
+      const auto table = options_.proposals->proposal(arrival, t);
+      for (Eigen::Index j = i * m; j < (i + 1) * m; ++j) {
+        double* xj = x.col(j).data();
+        if (!table || smc::uniform01(rng) < options_.defensive_share) {
+          prior_latents(i, rng, xj);
+        } else {
+          const model::TruckLatent drawn = table->draw(rng);
+          xj[kStiffness] = drawn.stiffness_npm;
+          xj[kTyreStiffness] = drawn.tyre_stiffness_npm;
+          xj[kLateral] = drawn.lateral_m;
+        }
+        const double log_prior = latent_log_density(xj, t, psi);
+        double log_q = log_prior;
+        if (table) {
+          const double a = log_table_share + table->log_density({xj[kStiffness], xj[kTyreStiffness], xj[kLateral]});
+          const double b = log_prior_share + log_prior;
+          const double top = std::max(a, b);  // finite: x was drawn from one of the two parts
+          log_q = top + std::log(std::exp(a - top) + std::exp(b - top));
+        }
+        log_w[j] = log_prior > -kInf ? log_prior - log_q : -kInf;
+        jobs.push_back({newest, xj, &ssr[j], psi});
+      }
+    }
+    simulate_ssr(jobs);
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const double sigma_if = theta_(kSigmaIf, i);
+      double top = -kInf;
+      for (Eigen::Index j = i * m; j < (i + 1) * m; ++j) {
+        if (log_w[j] > -kInf) log_w[j] += newest_loglik(ssr[j], sigma_if);
+        top = std::max(top, log_w[j]);
+      }
+      Eigen::Index chosen = i * m;
+      if (!(top > -kInf)) {
+        newest_log_zhat_[i] = -kInf;  // no draw the truck's data allow: the particle dies
+      } else {
+        double total = 0.0;
+        for (Eigen::Index j = i * m; j < (i + 1) * m; ++j) total += std::exp(log_w[j] - top);
+        newest_log_zhat_[i] = top + std::log(total / static_cast<double>(m));
+        // k ∝ w_k, by inversion of the one uniform drawn first.
+        double below = 0.0;
+        for (Eigen::Index j = i * m; j < (i + 1) * m; ++j) {
+          chosen = j;
+          below += std::exp(log_w[j] - top) / total;
+          if (pick[i] < below) break;
+        }
+      }
+      latents_.block(3 * newest, i, 3, 1) = x.col(chosen);
+      ssr_(newest, i) = ssr[chosen];
+    }
+  });
+  passes_ += P * m;
 }
 
 void FleetTarget::retire_oldest_kept_truck() {
@@ -172,6 +263,12 @@ double FleetTarget::stiffness_log_density(Eigen::Index i, double mean, double sd
 }
 
 double FleetTarget::base_density(Eigen::Index i, const HyperVector& t, const double* newest) const {
+  const double older = older_density(i, t);
+  if (!(older > -kInf)) return older;
+  return older + latent_log_density(newest, t, psi_.col(i).data());
+}
+
+double FleetTarget::older_density(Eigen::Index i, const HyperVector& t) const {
   const double* s = sums_.col(i).data();
   const double* psi = psi_.col(i).data();
   // The prior is uniform on a box: its log density inside is one constant (log_prior_inside_).
@@ -187,7 +284,7 @@ double FleetTarget::base_density(Eigen::Index i, const HyperVector& t, const dou
     lp += log_lateral_sum({n, s[kSumZ], s[kSumZ2]}, t[kZ], t[kSigmaZ], lateral_);
     lp += log_noise_sum(n * sensors_, s[kSumSsr], t[kSigmaIf]);
   }
-  return lp + latent_log_density(newest, t, psi);
+  return lp;
 }
 
 double FleetTarget::newest_loglik(double ssr, double sigma_if) const {
@@ -273,13 +370,24 @@ void FleetTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Ei
   parallel(options_.particles, [&](Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index i = begin; i < end; ++i) {
       const HyperVector t = theta_of(i);
-      log_base[i] = base_density(i, t, latents_.col(i).data() + 3 * newest);
-      loglik[i] = newest_loglik(ssr_(newest, i), t[kSigmaIf]);
+      if (newest_from_proposals_) {
+        // The stage's extended target (Options::proposals): log γ holds no term of the newest
+        // truck that any move below φ = 1 reads, and ℓ is its estimated marginal likelihood.
+        log_base[i] = older_density(i, t);
+        loglik[i] = newest_log_zhat_[i];
+      } else {
+        log_base[i] = base_density(i, t, latents_.col(i).data() + 3 * newest);
+        loglik[i] = newest_loglik(ssr_(newest, i), t[kSigmaIf]);
+      }
     }
   });
 }
 
 std::vector<smc::BlockSpec> FleetTarget::blocks() const {
+  // With proposals the stage's target below φ = 1 is an extended one (Options::proposals) that a
+  // random walk on the newest truck's latents alone would not keep: that truck is moved with
+  // the older ones from the next stage on.
+  if (newest_from_proposals_) return {};
   return {{"truck " + std::to_string(trucks()) + " (newest)", 3}};
 }
 
@@ -320,6 +428,7 @@ void FleetTarget::resample(const std::vector<Eigen::Index>& ancestors) {
   ssr_ = ssr_(Eigen::all, ancestors).eval();
   sums_ = sums_(Eigen::all, ancestors).eval();
   retired_ = retired_(Eigen::all, ancestors).eval();
+  if (newest_from_proposals_) newest_log_zhat_ = newest_log_zhat_(ancestors).eval();
 }
 
 void FleetTarget::save(BinaryWriter& out) const {
@@ -392,6 +501,7 @@ void FleetTarget::load(BinaryReader& in) {
     stiffness_scale_ = in.value<double>("stiffness_scale");
   }
   for (Eigen::Index i = 0; i < P; ++i) recompute_sums(i);
+  newest_from_proposals_ = false;  // a checkpoint falls between stages, where the proposals play no part
 }
 
 

@@ -56,10 +56,13 @@ smc::TemperedModel::ModelMoveResult FleetTarget::run_model_move(int move, int ru
       extension_sweep(rngs.child(2), parallel, PsiMove::kRandomWalk);
       return {true, extension_acceptance_};
     case 3:  // stiffness distribution
-      if (!stiffness_edited()) return {false};
+      // Below φ = 1 the target holds the newest truck's proposal, built at the stage's θ
+      // (Options::proposals): θ waits for φ = 1.
+      if (!stiffness_edited() || (newest_from_proposals_ && phi < 1.0)) return {false};
       stiffness_distribution_sweep(rngs.child(4), parallel);
       return {true, stiffness_acceptance_};
     case 4:  // theta
+      if (newest_from_proposals_ && phi < 1.0) return {false};  // as "stiffness distribution"
       theta_moves(phi, rngs.child(0), parallel, log_base, loglik);
       return {true};
     case 5:  // tyre stiffness interweave

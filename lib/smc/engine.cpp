@@ -159,7 +159,7 @@ StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view l
 
     // 4. move at the new temperature (IBIS: only once resampling has duplicated particles).
     const MoveSchedule& schedule = options_.schedule;
-    if (schedule.trigger == MoveSchedule::Trigger::kEveryStep || info.resampled) {
+    if (schedule.trigger == MoveSchedule::Trigger::kEveryStep || info.resampled || model.moves_every_step()) {
       info.mh = run_sweeps(model, phi, Wnew, log_base, loglik,
                            root_.child(kMove, stage_key, static_cast<std::uint64_t>(step)), parallel_, options_.mh,
                            schedule, schedule.min_sweeps, schedule.max_sweeps, runs_in_stage, label);

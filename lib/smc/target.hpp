@@ -67,6 +67,10 @@ class TemperedModel {
   // New particle i becomes a copy of old particle ancestors[i].
   virtual void resample(const std::vector<Eigen::Index>& ancestors) = 0;
 
+  // Under MoveSchedule::Trigger::kAfterResampling, whether this stage's steps should move the
+  // particles even when they did not resample: a model whose static parameters are still being
+  // located (its first records) can ask for it, and the moves are then paid where they are cheap.
+  virtual bool moves_every_step() const { return false; }
   // The model's own moves that leave π_φ invariant (Gibbs draws, a model-specific MH), by name.
   // None runs unless the sampler's MoveSchedule lists it; the schedule says when.
   virtual std::vector<std::string> model_moves() const { return {}; }
