@@ -30,10 +30,15 @@ TableProposal::TableProposal(const TableView& table, const FleetMarginal& margin
   k_spread_npm_ = 0.5 * lattice.dk_npm;
   kt_spread_npm_ = 0.5 * lattice.dkt_npm;
   const double prior_var = terms.lateral_var_m2;
+  // Entries whose share is below e^-kPruneNats of the largest are left out (and the rest
+  // renormalised): the mixture drawn from and the density returned stay one and the same, so an
+  // importance weight or an MH ratio built on them stays exact, and a table of thousands of nodes
+  // of which a few dozen carry weight at this θ costs only those.
+  constexpr float kPruneNats = 30.0f;
   double total = 0.0;
   for (std::size_t g = 0; g < n; ++g) {
+    if (!(e[g] >= top - kPruneNats)) continue;
     const double w = std::exp(static_cast<double>(e[g] - top));
-    if (!(w > 0.0)) continue;  // underflowed: no share to draw
     total += w;
     cumulative_.push_back(total);
     log_pi_.push_back(static_cast<double>(e[g] - top));
@@ -53,20 +58,33 @@ TableProposal::TableProposal(const TableView& table, const FleetMarginal& margin
   for (auto& c : cumulative_) c /= total;
   cumulative_.back() = 1.0;
   for (auto& l : log_pi_) l -= log_total;
+  // log π_g + the three Gaussians' normalising constants, once: log_density is called per draw.
+  constexpr double kLogTwoPi = 1.8378770664093453;
+  log_constant_.resize(log_pi_.size());
+  for (std::size_t g = 0; g < log_pi_.size(); ++g) {
+    log_constant_[g] = log_pi_[g] - std::log(k_spread_npm_) - std::log(kt_spread_npm_) - std::log(z_sd_m_[g]) - 1.5 * kLogTwoPi;
+  }
 }
 
 double TableProposal::log_density(const TruckLatent& x) const {
-  double top = -std::numeric_limits<double>::infinity();
-  std::vector<double> terms(k_npm_.size());
+  // log Σ_g exp(t_g) in one pass, rescaling when a larger term turns up.
+  double top = -std::numeric_limits<double>::infinity(), sum = 0.0;
   for (std::size_t g = 0; g < k_npm_.size(); ++g) {
-    terms[g] = log_pi_[g] + fleet::log_normal_density(x.stiffness_npm, k_npm_[g], k_spread_npm_) +
-               fleet::log_normal_density(x.tyre_stiffness_npm, kt_npm_[g], kt_spread_npm_) +
-               fleet::log_normal_density(x.lateral_m, z_mean_m_[g], z_sd_m_[g]);
-    top = std::max(top, terms[g]);
+    const double dk = (x.stiffness_npm - k_npm_[g]) / k_spread_npm_;
+    const double dkt = (x.tyre_stiffness_npm - kt_npm_[g]) / kt_spread_npm_;
+    const double dz = (x.lateral_m - z_mean_m_[g]) / z_sd_m_[g];
+    const double t = log_constant_[g] - 0.5 * (dk * dk + dkt * dkt + dz * dz);
+    // A term more than 50 nats below the largest is below the sum's rounding (e^-50 < 1e-21), and
+    // glibc's exp takes a slow path on results that deep: skip it.
+    constexpr double kNegligible = -50.0;
+    if (t > top) {
+      sum = (top - t > kNegligible ? sum * std::exp(top - t) : 0.0) + 1.0;
+      top = t;
+    } else if (t - top > kNegligible) {
+      sum += std::exp(t - top);
+    }
   }
   if (!(top > -std::numeric_limits<double>::infinity())) return top;
-  double sum = 0.0;
-  for (double t : terms) sum += std::exp(t - top);
   return top + std::log(sum);
 }
 

@@ -46,6 +46,7 @@ class TableProposal {
   std::vector<double> cumulative_;  // Σ_{h<=g} π_h, the last one 1
   std::vector<double> log_pi_;
   std::vector<double> k_npm_, kt_npm_, z_mean_m_, z_sd_m_;
+  std::vector<double> log_constant_;  // log π_g and the Gaussians' normalising constants
   double k_spread_npm_ = 0.0, kt_spread_npm_ = 0.0;
 };
 
