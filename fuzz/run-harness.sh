@@ -23,9 +23,11 @@ start=$SECONDS
 # -max_total_time is wall time: on a shared machine the harness gets less CPU than that, so the CPU
 # seconds it used (user + system, bash's `time`) are reported beside it.
 TIMEFORMAT='%U %S'
-{ time { "$fuzzer" "$work/corpus" -max_total_time="$seconds" -print_final_stats=1 -timeout="${FUZZ_TIMEOUT:-10}" \
+# A crash or a timeout makes the fuzzer exit non-zero: caught here (set -e would otherwise end
+# the script before the summary and the artifacts below are printed).
+{ time { status=0; "$fuzzer" "$work/corpus" -max_total_time="$seconds" -print_final_stats=1 -timeout="${FUZZ_TIMEOUT:-10}" \
   -malloc_limit_mb=1024 -rss_limit_mb=2048 -max_len="$max_len" -artifact_prefix="$work/artifacts/" \
-  >"$work/log.txt" 2>&1; echo $? > "$work/status"; }; } 2> "$work/cpu.txt"
+  >"$work/log.txt" 2>&1 || status=$?; echo "$status" > "$work/status"; }; } 2> "$work/cpu.txt"
 status=$(cat "$work/status")
 took=$((SECONDS - start))
 cpu=$(awk '{printf "%.0f", $1 + $2}' "$work/cpu.txt")
