@@ -108,15 +108,22 @@ void write_bytes(const std::string& path, std::string_view bytes) {
 // resume throws.
 void resume_from(std::string_view input);
 
-// Every seed in `dir` must resume without an error: a seed the reader rejects (the checkpoint format
-// moved on since it was made) leaves the campaign fuzzing the rejection alone. It happened: stale
-// seeds reached 1,567 edges, fresh ones 2,277. Exits 1 naming the stale seed.
+// Every seed in `dir` must get through the readers the harness fuzzes: a seed they reject (the
+// checkpoint format moved on since it was made) leaves the campaign fuzzing the rejection alone. It
+// happened: stale seeds reached 1,567 edges, fresh ones 2,277. The input carries no history
+// database, so a resume that read checkpoint.bin and trucks.bin stops at the history's check
+// (stream/wim_stream.cpp, open_history): that, and only that, error is a pass. Exits 1 naming the
+// stale seed.
 void check_seeds(const std::string& dir) {
   int checked = 0;
   for (const auto& entry : fs::directory_iterator(dir)) {
     const std::string bytes = read_bytes(entry.path().string());
     try {
-      resume_from(bytes);
+      try {
+        resume_from(bytes);
+      } catch (const DataError& e) {
+        if (std::string_view(e.what()).find("history.sqlite") == std::string_view::npos) throw;
+      }
     } catch (const std::exception& e) {
       std::fprintf(stderr, "stale seed %s: a resume from it fails: %s\n(remake the seeds: SSRFLEET_FUZZ_MAKE_SEEDS=%s)\n",
                    entry.path().c_str(), e.what(), dir.c_str());
