@@ -8,18 +8,26 @@
 //                      [--skip-detection]
 //                      [--effects "sensor_gain:sensor=5,gain=1.05;tyre_damping:c_t=2000;none"]
 //                      [--trucks 20,50,100,200] [--seeds 2] [--particles 256] [--threads 2]
+//                      [--clean-logs 0] [--clean-trucks 100] [--runs FILE.jsonl] [--plot STEM] [--skip-timing]
 //                      [--json FILE] [--markdown FILE]
+// The detection part is issue 17 item 4's power table (diagnose_power.hpp): --seeds logs per
+// (effect, fleet size), --clean-logs more clean logs of --clean-trucks for the pooled false-alarm
+// rate, every run appended to --runs as it ends (a restart skips those), --plot STEM the figure.
+// An effect's size is its setting's last parameter: write the one that grows last.
 #include <chrono>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "diagnose_power.hpp"
+#include "run_info.hpp"
 #include "discrepancy/diagnose.hpp"
 #include "fleet/simulator.hpp"
 #include "model/fleet_distribution.hpp"
@@ -48,7 +56,6 @@ std::vector<records::WimRecord> make_log(const site::Site& site, const std::stri
   return fleet::simulate_log(site, fleet, 0.02, seed, *e.extension, e.psi).records;
 }
 
-std::string effect_name(const std::string& setting) { return setting.substr(0, setting.find(':')); }
 
 }  // namespace
 
@@ -58,7 +65,9 @@ int main(int argc, char** argv) {
   bool skip_prior = false;
   std::string effects_arg = "sensor_gain:sensor=5,gain=1.05;tyre_damping:c_t=2000;none";
   std::string trucks_arg = "20,50,100,200";
-  int seeds = 2, particles = 256, timing_particles = 512, threads = 2;
+  int seeds = 2, particles = 256, timing_particles = 512, threads = 2, clean_logs = 0, clean_trucks = 100;
+  std::string runs_path, plot_stem;
+  bool skip_timing = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const auto next = [&]() -> std::string {
@@ -69,6 +78,11 @@ int main(int argc, char** argv) {
     else if (a == "--timing-two") timing_two = next();
     else if (a == "--skip-prior") skip_prior = true;
     else if (a == "--skip-detection") trucks_arg.clear();
+    else if (a == "--skip-timing") skip_timing = true;
+    else if (a == "--runs") runs_path = next();
+    else if (a == "--clean-logs") clean_logs = std::stoi(next());
+    else if (a == "--clean-trucks") clean_trucks = std::stoi(next());
+    else if (a == "--plot") plot_stem = next();
     else if (a == "--timing-particles") timing_particles = std::stoi(next());
     else if (a == "--effects") effects_arg = next();
     else if (a == "--trucks") trucks_arg = next();
@@ -80,7 +94,8 @@ int main(int argc, char** argv) {
     else {
       std::cerr << "usage: diagnose_benchmark [--timing-effect SETTING] [--timing-two A+B] [--skip-prior] [--skip-detection] "
                    "[--timing-particles 512] [--effects \"A;B;none\"] "
-                   "[--trucks 20,50,100,200] [--seeds 2] [--particles 256] [--threads 2] [--json FILE] [--markdown FILE]\n";
+                   "[--trucks 20,50,100,200] [--seeds 2] [--clean-logs 0] [--clean-trucks 100] [--runs FILE.jsonl] "
+                   "[--plot STEM] [--skip-timing] [--particles 256] [--threads 2] [--json FILE] [--markdown FILE]\n";
       return a == "--help" || a == "-h" ? 0 : 64;
     }
   }
@@ -93,7 +108,7 @@ int main(int argc, char** argv) {
   // a second effect at most as much again): one effect, then two at once, then (unless
   // --skip-prior) the one-effect log again with the candidates refitted the older way, each new
   // truck drawn from the fleet prior, side by side in this run.
-  {
+  if (!skip_timing) {
     struct Timed {
       std::string label, setting;
       bool from_tables = true;
@@ -151,49 +166,69 @@ int main(int argc, char** argv) {
     md << "\n\n";
   }
 
-  // 2. Detection rate against the number of trucks (none with --skip-detection).
+  // 2. Detection rate against effect size and fleet size, and false alarms on clean logs (issue 17
+  // item 4; none with --skip-detection). Runs already in --runs are not done again.
   const auto effects = trucks_arg.empty() ? std::vector<std::string>{} : split(effects_arg, ';');
   std::vector<int> sizes;
   for (const auto& s : split(trucks_arg, ',')) sizes.push_back(std::stoi(s));
-  if (!effects.empty()) {
-    md << "## Detection rate (" << seeds << " seeds per cell, " << particles << " particles)\n\n"
-       << "A cell is right/runs: the named effect is the simulated one (for `none`: nothing named). Below it, what was "
-          "named instead and the mean wall time.\n\n| effect |";
-    for (int n : sizes) md << " " << n << " trucks |";
-    md << "\n|---|";
-    for (std::size_t k = 0; k < sizes.size(); ++k) md << "---|";
-    md << "\n";
+  std::vector<bench::power::Run> runs = runs_path.empty() ? std::vector<bench::power::Run>{} : bench::power::read_runs(runs_path);
+  // Only runs at this particle count belong to this table.
+  const auto other = std::erase_if(runs, [&](const bench::power::Run& r) { return r.particles != particles; });
+  if (other > 0) std::cerr << "detection: " << other << " runs of " << runs_path << " at another particle count left out\n";
+  const std::string commit = bench::run_command("git rev-parse --short HEAD 2>/dev/null");
+  std::set<bench::power::Key> done;
+  for (const auto& r : runs) done.insert(bench::power::key_of(r));
+  struct Todo {
+    std::string setting;
+    int trucks;
+    std::uint64_t seed;
+  };
+  std::vector<Todo> todo;
+  for (const auto& setting : effects)
+    for (int n : sizes)
+      for (int s = 1; s <= seeds; ++s) todo.push_back({setting, n, static_cast<std::uint64_t>(100 + s)});
+  for (int s = 1; s <= clean_logs; ++s) todo.push_back({"none", clean_trucks, static_cast<std::uint64_t>(2000 + s)});
+  std::erase_if(todo, [&](const Todo& t) { return done.count({t.setting, t.trucks, t.seed}) > 0; });
+  if (!runs.empty()) std::cerr << "detection: " << runs.size() << " runs read from " << runs_path << ", " << todo.size() << " to do\n";
+  double spent_s = 0.0;
+  for (std::size_t k = 0; k < todo.size(); ++k) {
+    const Todo& t = todo[k];
+    discrepancy::DiagnoseOptions o;
+    o.particles = particles;
+    o.threads = threads;
+    o.seed = t.seed;
+    const auto r = discrepancy::diagnose(site, make_log(site, t.setting, t.trucks, t.seed), o);
+    const bench::power::Run run{t.setting, t.trucks, t.seed, r.effect, r.verdict, r.wall_s, particles, commit};
+    runs.push_back(run);
+    if (!runs_path.empty()) bench::power::append_run(runs_path, run);
+    spent_s += r.wall_s;
+    const double left_s = spent_s / static_cast<double>(k + 1) * static_cast<double>(todo.size() - k - 1);
+    std::cerr << "detection " << (k + 1) << "/" << todo.size() << ": " << t.setting << ", " << t.trucks << " trucks, seed "
+              << t.seed << ": named " << r.effect << " (" << std::fixed << std::setprecision(1) << r.wall_s
+              << " s; about " << std::setprecision(0) << left_s / 60.0 << " min left)\n" << std::defaultfloat;
   }
-  for (const auto& setting : effects) {
-    const std::string want = effect_name(setting);
-    md << "| " << setting << " |";
-    for (int n : sizes) {
-      int right = 0;
-      double wall = 0.0;
-      std::map<std::string, int> named;
-      for (int s = 1; s <= seeds; ++s) {
-        discrepancy::DiagnoseOptions o;
-        o.particles = particles;
-        o.threads = threads;
-        o.seed = static_cast<std::uint64_t>(100 + s);
-        const auto r = discrepancy::diagnose(site, make_log(site, setting, n, o.seed), o);
-        right += r.effect == want;
-        ++named[r.effect];
-        wall += r.wall_s;
-        report["detection"].push_back({{"effect", setting}, {"trucks", n}, {"seed", o.seed}, {"named", r.effect},
-                                       {"log_bayes_factor", r.log_bayes_factor}, {"wall_s", r.wall_s}});
-        std::cerr << "detection: " << setting << ", " << n << " trucks, seed " << o.seed << ": named " << r.effect
-                  << " (" << std::fixed << std::setprecision(1) << r.wall_s << " s)\n" << std::defaultfloat;
-      }
-      md << " " << right << "/" << seeds << " (";
-      bool first = true;
-      for (const auto& [name, count] : named) {
-        md << (first ? "" : ", ") << name << " " << count;
-        first = false;
-      }
-      md << "; " << std::fixed << std::setprecision(0) << wall / seeds << " s) |" << std::defaultfloat;
+  for (const auto& r : runs) {
+    report["detection"].push_back({{"effect", r.setting}, {"trucks", r.trucks}, {"seed", r.seed}, {"named", r.named},
+                                   {"verdict", r.verdict}, {"right", bench::power::right(r)}, {"wall_s", r.wall_s}});
+  }
+  if (!runs.empty()) {
+    // Settings and sizes as asked, then any others the runs file holds (an earlier campaign's).
+    std::vector<std::string> settings = effects;
+    std::vector<int> all_sizes = sizes;
+    for (const auto& r : runs) {
+      if (r.setting != "none" && std::find(settings.begin(), settings.end(), r.setting) == settings.end())
+        settings.push_back(r.setting);
+      if (std::find(all_sizes.begin(), all_sizes.end(), r.trucks) == all_sizes.end()) all_sizes.push_back(r.trucks);
     }
-    md << "\n";
+    std::sort(all_sizes.begin(), all_sizes.end());
+    if (std::find(settings.begin(), settings.end(), "none") == settings.end()) settings.push_back("none");
+    md << bench::power::tables(runs, settings, all_sizes, std::to_string(particles) + " particles, the whole catalogue") << "\n";
+    if (!plot_stem.empty()) {
+      const std::string problem = bench::power::write_plot(plot_stem, runs, all_sizes);
+      md << "Plot: `" << plot_stem << ".png` (data `" << plot_stem << ".csv`)";
+      if (!problem.empty()) md << "; " << problem;
+      md << ".\n\n";
+    }
   }
   if (!json_path.empty()) std::ofstream(json_path) << report.dump(1) << "\n";
   if (!md_path.empty()) std::ofstream(md_path) << md.str();

@@ -13,12 +13,12 @@
 #include <string>
 #include <vector>
 
-#include <boost/math/distributions/beta.hpp>
 
 #include "discrepancy/site_conflicts.hpp"
 #include "fleet/simulator.hpp"
 #include "model/fleet_distribution.hpp"
 #include "site/road_source.hpp"
+#include "util/binomial_interval.hpp"
 
 using namespace ssrfleet;
 
@@ -53,12 +53,6 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
-// Clopper-Pearson 95 % interval of x successes in n.
-std::pair<double, double> clopper_pearson(int x, int n) {
-  const double lo = x == 0 ? 0.0 : boost::math::quantile(boost::math::beta_distribution<>(x, n - x + 1), 0.025);
-  const double hi = x == n ? 1.0 : boost::math::quantile(boost::math::beta_distribution<>(x + 1, n - x), 0.975);
-  return {lo, hi};
-}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -107,7 +101,7 @@ int main(int argc, char** argv) {
     std::cout << "network " << (r + 1) << "/" << a.networks << ": min p " << std::setprecision(3) << min_p
               << (any ? ", a site flagged" : "") << (undecided ? ", undecided" : "") << std::endl;
   }
-  const auto [lo, hi] = clopper_pearson(flagged_networks, a.networks);
+  const auto [lo, hi] = util::clopper_pearson(flagged_networks, a.networks);
   int below[3] = {0, 0, 0};
   for (double p : p_first) {
     below[0] += p < 0.5 ? 1 : 0;

@@ -16,6 +16,7 @@
 #include "fleet/replay.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/simulator.hpp"
+#include "simulated_case.hpp"
 #include "util/binary_io.hpp"
 #include "site/road_source.hpp"
 #include "util/effective_sample_size.hpp"
@@ -25,14 +26,7 @@ using namespace ssrfleet;
 
 namespace {
 
-struct Case {
-  site::Site site{site::load_road("AS1"), site::SiteOptions{}};
-  fleet::SimulatedLog log;
-  Case(int n, std::uint64_t seed) {
-    const auto trucks = fleet::draw_fleet(fleet::FleetDistribution{}, n, site.lateral_min_m(), site.lateral_max_m(), seed);
-    log = fleet::simulate_log(site, trucks, 0.02, seed);
-  }
-};
+using Case = test::SimulatedCase;
 
 fleet::MarginalSmc::Options options(Eigen::Index particles, int threads, std::uint64_t seed) {
   fleet::MarginalSmc::Options o;  // the defaults `ssrfleet fit` uses

@@ -12,6 +12,7 @@
 #include "fleet/marginal_smc.hpp"
 #include "fleet/new_truck_proposals.hpp"
 #include "fleet/simulator.hpp"
+#include "simulated_case.hpp"
 #include "model/fleet_distribution.hpp"
 #include "site/road_source.hpp"
 #include "util/binary_io.hpp"
@@ -21,14 +22,7 @@ using namespace ssrfleet;
 
 namespace {
 
-struct Case {
-  site::Site site{site::load_road("AS1"), site::SiteOptions{}};
-  fleet::SimulatedLog log;
-  Case(int n, std::uint64_t seed) {
-    const auto trucks = fleet::draw_fleet(fleet::FleetDistribution{}, n, site.lateral_min_m(), site.lateral_max_m(), seed);
-    log = fleet::simulate_log(site, trucks, 0.02, seed);
-  }
-};
+using Case = test::SimulatedCase;
 
 // The marginal fit whose tables propose the latent core's new trucks.
 std::unique_ptr<fleet::MarginalSmc> marginal_fit(const Case& c, Eigen::Index particles, std::uint64_t seed) {

@@ -10,6 +10,7 @@
 #include "fleet/fleet_smc.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/simulator.hpp"
+#include "simulated_case.hpp"
 #include "model/fleet_distribution.hpp"
 #include "predict/ssr_prediction.hpp"
 #include "site/road_source.hpp"
@@ -21,15 +22,7 @@ using namespace ssrfleet;
 namespace {
 const fleet::HyperVector kTruth{500e3, 50e3, 1950e3, 195e3, 1.5, 0.5, 0.02};
 
-struct Case {
-  site::Site site{site::load_road("AS1"), site::SiteOptions{}};
-  std::vector<records::Truck> trucks;
-  fleet::SimulatedLog log;
-  Case(int n, std::uint64_t seed) {
-    trucks = fleet::draw_fleet(fleet::FleetDistribution{}, n, site.lateral_min_m(), site.lateral_max_m(), seed);
-    log = fleet::simulate_log(site, trucks, kTruth[fleet::kSigmaIf], seed);
-  }
-};
+using Case = test::SimulatedCase;
 
 fleet::FleetSmc::Options smc_options(Eigen::Index particles, int threads, std::uint64_t seed) {
   fleet::FleetSmc::Options o;  // the defaults `ssrfleet fit` uses

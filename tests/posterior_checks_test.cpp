@@ -110,6 +110,10 @@ PosteriorDraws make_draws(std::uint64_t seed, double neighbour_correlation = 0.0
   draws.stiffness_pit = stiffness_pit_draws(seed, [](boost::random::mt19937_64& e) {
     return boost::random::normal_distribution<double>(0.0, 1.0)(e);
   });
+  // The tyre stiffnesses' stream is another again (stiffness_pit_draws XORs its seed).
+  draws.tyre_stiffness_pit = stiffness_pit_draws(seed ^ 0x7474ULL, [](boost::random::mt19937_64& e) {
+    return boost::random::normal_distribution<double>(0.0, 1.0)(e);
+  });
   return draws;
 }
 
@@ -171,7 +175,8 @@ TEST_CASE("posterior checks report one result per family in enum order", "[check
     CHECK(result.flagged == (result.p_value < 0.01));
     CHECK(result.p_value >= smallest_p(200));
     CHECK(result.p_value <= 1.0);
-    if (result.kind == CheckKind::kAutocorrelation || result.kind == CheckKind::kStiffnessDistribution) {
+    if (result.kind == CheckKind::kAutocorrelation || result.kind == CheckKind::kStiffnessDistribution ||
+        result.kind == CheckKind::kLatentCovariates) {
       CHECK(result.per_sensor.empty());
       CHECK(result.sensor == 0);
     } else {
@@ -337,6 +342,70 @@ TEST_CASE("a second class of stiffer trucks fails the stiffness-distribution che
   }
 }
 
+namespace {
+// Each truck's standardised stiffness: `slope` times its covariate's standard score plus
+// independent noise of the rest of the unit variance, compared with N(0, 1) as the fit would
+// (the fleet's spread is right; only its dependence on the covariate is not in the model).
+std::vector<Eigen::VectorXd> covariate_pit_draws(std::uint64_t seed, const Eigen::VectorXd& covariate, double slope) {
+  const Eigen::ArrayXd x = covariate.array();
+  const Eigen::ArrayXd score = (x - x.mean()) / std::sqrt((x - x.mean()).square().mean());
+  Eigen::Index i = 0;
+  return stiffness_pit_draws(seed, [&](boost::random::mt19937_64& e) {
+    const double noise = boost::random::normal_distribution<double>(0.0, 1.0)(e);
+    return slope * score[i++] + std::sqrt(1.0 - slope * slope) * noise;
+  });
+}
+}  // namespace
+
+TEST_CASE("tyre stiffness rising with speed fails the latent-covariate check, which names k_t and speed", "[checks]") {
+  // Correlation 0.6 over 100 trucks: N c² ≈ 30 (less the PIT's bend), beyond every one of 4000
+  // replicates of the largest of four χ²_1 (P(max > 20) ≈ 3e-5).
+  PosteriorDraws draws = make_draws(11);
+  draws.tyre_stiffness_pit = covariate_pit_draws(11 ^ 0x7474ULL, draws.speed_mps, 0.6);
+  const CheckReport report = discrepancy::run_checks(draws, options_with(kReplicates, 11, 1e-3));
+  const CheckResult& latent = check(report, CheckKind::kLatentCovariates);
+  check_found(latent, kReplicates);
+  CHECK_THAT(latent.detail, Catch::Contains("k_t against speed") && Catch::Contains("correlation +0."));
+  // The residuals are the model's: no residual family sees it, and neither does the shape of k.
+  for (CheckKind kind : {CheckKind::kSensorMean, CheckKind::kSensorDispersion, CheckKind::kSpeed, CheckKind::kMass,
+                         CheckKind::kStiffnessDistribution}) {
+    check_not_found(check(report, kind));
+  }
+}
+
+TEST_CASE("suspension stiffness falling with load fails the latent-covariate check, naming k and sprung mass", "[checks]") {
+  PosteriorDraws draws = make_draws(12);
+  draws.stiffness_pit = covariate_pit_draws(12, draws.sprung_mass_kg, -0.6);
+  const CheckReport report = discrepancy::run_checks(draws, options_with(kReplicates, 12, 1e-3));
+  const CheckResult& latent = check(report, CheckKind::kLatentCovariates);
+  check_found(latent, kReplicates);
+  CHECK_THAT(latent.detail, Catch::Contains("k against sprung mass") && Catch::Contains("correlation -0."));
+  check_not_found(check(report, CheckKind::kMass));
+}
+
+TEST_CASE("the latent-covariate family changes no other family's result and is vacuous without latents", "[checks]") {
+  const PosteriorDraws with = make_draws(13);
+  PosteriorDraws without = with;
+  without.tyre_stiffness_pit.clear();
+  const CheckOptions options = options_with(1000, 13);
+  const CheckReport a = discrepancy::run_checks(with, options);
+  const CheckReport b = discrepancy::run_checks(without, options);
+  for (std::size_t k = 0; k < a.checks.size(); ++k) {
+    if (a.checks[k].kind == CheckKind::kLatentCovariates) continue;
+    INFO(fleet::check_name(a.checks[k].kind));
+    CHECK(a.checks[k].p_value == b.checks[k].p_value);
+    CHECK(a.checks[k].statistic == b.checks[k].statistic);
+  }
+  // With k alone the family still runs (its statistic is positive); with neither it is vacuous.
+  CHECK(check(b, CheckKind::kLatentCovariates).statistic > 0.0);
+  PosteriorDraws neither = without;
+  neither.stiffness_pit.clear();
+  const CheckResult& none = check(discrepancy::run_checks(neither, options), CheckKind::kLatentCovariates);
+  CHECK(none.statistic == 0.0);
+  CHECK(none.p_value == 1.0);
+  CHECK(none.detail.empty());
+}
+
 TEST_CASE("posterior checks reject inconsistent sizes naming the culprit", "[checks]") {
   const PosteriorDraws good = make_draws(8);
   const CheckOptions options = options_with(10, 1);
@@ -389,6 +458,16 @@ TEST_CASE("posterior checks reject inconsistent sizes naming the culprit", "[che
     PosteriorDraws d = good;
     d.stiffness_pit[2][4] = 1.5;
     rejects(d, "stiffness_pit[2]");
+  }
+  {
+    PosteriorDraws d = good;
+    d.tyre_stiffness_pit.pop_back();
+    rejects(d, "tyre_stiffness_pit holds");
+  }
+  {
+    PosteriorDraws d = good;
+    d.tyre_stiffness_pit[6].conservativeResize(kTrucks - 1);
+    rejects(d, "tyre_stiffness_pit[6]");
   }
   {
     PosteriorDraws d = good;

@@ -48,6 +48,7 @@ nlohmann::json checks_json(const CheckReport& report) {
                  {"failed", c.flagged},
                  {"sensor", c.sensor},
                  {"per_sensor", c.per_sensor}});
+    if (!c.detail.empty()) a.back()["detail"] = c.detail;
   }
   return a;
 }
@@ -83,7 +84,7 @@ void write_checks_table(std::ostream& os, const DiagnoseResult& r) {
     const auto& c = r.checks_before.checks[k];
     os << "| " << fleet::check_name(c.kind) << " | " << fixed(c.statistic, 2) << " (replicated " << fixed(c.replicated, 2)
        << ") | " << fixed(c.p_value, 4) << " | " << (c.flagged ? "yes" : "no") << " | "
-       << (c.sensor > 0 ? "sensor " + std::to_string(c.sensor) : std::string("-")) << " |";
+       << (c.sensor > 0 ? "sensor " + std::to_string(c.sensor) : (c.detail.empty() ? std::string("-") : c.detail)) << " |";
     if (after) os << " " << fixed(r.checks_after.checks[k].p_value, 4) << " |";
     os << "\n";
   }

@@ -143,6 +143,7 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::MarginalSmc&
   out.lateral_m.assign(chosen.size(), Eigen::VectorXd());
   out.sigma_if.assign(chosen.size(), 0.0);
   out.stiffness_pit.assign(chosen.size(), Eigen::VectorXd());
+  out.tyre_stiffness_pit.assign(chosen.size(), Eigen::VectorXd());
   std::vector<MarginalDrawStats> per_draw(chosen.size());
   const smc::ParallelFor parallel(o.threads);
   parallel(static_cast<Eigen::Index>(chosen.size()), [&](Eigen::Index begin, Eigen::Index end) {
@@ -154,16 +155,18 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::MarginalSmc&
       // Each (draw, truck) has its own stream: the draws do not depend on the thread count.
       TruckLatentDraws drawn =
           draw_truck_latents(site, target, theta, root.child(1, static_cast<std::uint64_t>(d)), o.mh_steps, &per_draw[slot]);
-      Eigen::VectorXd lateral(n), pit(n);
+      Eigen::VectorXd lateral(n), pit(n), tyre_pit(n);
       for (Eigen::Index i = 0; i < n; ++i) {
         const auto& x = drawn.latents[static_cast<std::size_t>(i)];
         lateral[i] = x.lateral_m;
         pit[i] = fleet::normal_cdf((x.stiffness_npm - theta[fleet::kK]) / theta[fleet::kSigmaK]);
+        tyre_pit[i] = fleet::normal_cdf((x.tyre_stiffness_npm - theta[fleet::kKt]) / theta[fleet::kSigmaKt]);
       }
       out.model_if[slot] = std::move(drawn.model_if);
       out.lateral_m[slot] = lateral;
       out.sigma_if[slot] = theta[fleet::kSigmaIf];
       out.stiffness_pit[slot] = pit;
+      out.tyre_stiffness_pit[slot] = tyre_pit;
     }
   });
   if (stats != nullptr) {

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -19,8 +21,8 @@ namespace {
 
 constexpr int kFamilies = static_cast<int>(CheckKind::kCount);
 // The families with a value per sensor come first in CheckKind; the autocorrelation (a property
-// of each truck's whole residual vector) and the stiffness distribution (of the trucks' latents)
-// have none.
+// of each truck's whole residual vector), the stiffness distribution and the latent covariates
+// (of the trucks' latents) have none.
 constexpr int kPerSensorFamilies = static_cast<int>(CheckKind::kAutocorrelation);
 // The covariate families kSpeed, kMass, kLateral are consecutive.
 constexpr int kFirstCovariate = static_cast<int>(CheckKind::kSpeed);
@@ -45,6 +47,19 @@ std::string indexed(const char* name, std::size_t d) {
 
 std::string shape(const Eigen::MatrixXd& m) {
   return std::to_string(m.rows()) + " x " + std::to_string(m.cols());
+}
+
+// A per-draw vector of probability integral transforms: empty, or one per draw, each a value in
+// [0, 1] per truck.
+void validate_pit(const std::vector<Eigen::VectorXd>& pit, const char* name, std::size_t D, Index trucks) {
+  require(pit.empty() || pit.size() == D, std::string(name) + " holds " + std::to_string(pit.size()) +
+                                              " draws, but model_if holds " + std::to_string(D) + " (or must be empty)");
+  for (std::size_t d = 0; d < pit.size(); ++d) {
+    const Eigen::VectorXd& u = pit[d];
+    require(u.size() == trucks, indexed(name, d) + " has " + std::to_string(u.size()) + " entries, but observed has " +
+                                    std::to_string(trucks) + " trucks");
+    require((u.array() >= 0.0 && u.array() <= 1.0).all(), indexed(name, d) + " holds a value outside [0, 1]");
+  }
 }
 
 void validate(const PosteriorDraws& draws, const CheckOptions& options) {
@@ -82,15 +97,8 @@ void validate(const PosteriorDraws& draws, const CheckOptions& options) {
     require(std::isfinite(draws.sigma_if[d]) && draws.sigma_if[d] > 0.0,
             indexed("sigma_if", d) + " is " + std::to_string(draws.sigma_if[d]) + ", but must be positive");
   }
-  require(draws.stiffness_pit.empty() || draws.stiffness_pit.size() == D,
-          "stiffness_pit holds " + std::to_string(draws.stiffness_pit.size()) + " draws, but model_if holds " +
-              std::to_string(D) + " (or must be empty)");
-  for (std::size_t d = 0; d < draws.stiffness_pit.size(); ++d) {
-    const Eigen::VectorXd& u = draws.stiffness_pit[d];
-    require(u.size() == y.cols(), indexed("stiffness_pit", d) + " has " + std::to_string(u.size()) +
-                                      " entries, but observed has " + n + " trucks");
-    require((u.array() >= 0.0 && u.array() <= 1.0).all(), indexed("stiffness_pit", d) + " holds a value outside [0, 1]");
-  }
+  validate_pit(draws.stiffness_pit, "stiffness_pit", D, y.cols());
+  validate_pit(draws.tyre_stiffness_pit, "tyre_stiffness_pit", D, y.cols());
 }
 
 // ---- The stiffness family ----------------------------------------------------------------------
@@ -211,6 +219,52 @@ class ResidualStatistics {
   Eigen::VectorXd sensor_ss_;       // per sensor: Σ_i (r_im - r̄_m)²
 };
 
+// ---- The latent-covariate family ---------------------------------------------------------------
+
+// The four pairs the family tests, in the order of LatentCovariates::correlation.
+constexpr int kLatentPairs = 4;
+constexpr const char* kLatentPairNames[kLatentPairs] = {"k against speed", "k against sprung mass",
+                                                        "k_t against speed", "k_t against sprung mass"};
+
+// T = N max c² over (k, k_t) x (speed, sprung mass), c the Pearson correlation of a stiffness's
+// PIT values with the covariate. Each N c² is about χ²_1 under the model; the replicates give the
+// maximum's exact reference distribution for these trucks' covariates (which are fixed, so their
+// own correlation is accounted for). A missing PIT vector leaves its pairs at c = 0.
+class LatentCovariates {
+ public:
+  LatentCovariates(const Eigen::VectorXd& speed_mps, const Eigen::VectorXd& sprung_mass_kg)
+      : directions_(speed_mps.size(), 2), centred_(speed_mps.size()) {
+    directions_.col(0) = unit_direction(speed_mps);
+    directions_.col(1) = unit_direction(sprung_mass_kg);
+  }
+
+  // k_pit, tyre_pit: one draw's PIT values, or null when absent. Returns T.
+  double evaluate(const Eigen::VectorXd* k_pit, const Eigen::VectorXd* tyre_pit) {
+    correlation.setZero();
+    add(k_pit, 0);
+    add(tyre_pit, 2);
+    return static_cast<double>(directions_.rows()) * correlation.cwiseAbs2().maxCoeff();
+  }
+
+  Eigen::Vector4d correlation = Eigen::Vector4d::Zero();  // signed c of each pair, last evaluate()
+
+ private:
+  void add(const Eigen::VectorXd* u, int first) {
+    if (u == nullptr) return;
+    centred_ = u->array() - u->mean();
+    const double norm = centred_.norm();
+    if (!(norm > 0.0)) return;  // every truck at one quantile: correlates with nothing
+    correlation.segment<2>(first).noalias() = directions_.transpose() * centred_ / norm;
+  }
+
+  Eigen::MatrixXd directions_;  // trucks x 2: unit directions of speed and sprung mass
+  Eigen::VectorXd centred_;
+};
+
+const Eigen::VectorXd* pit_of(const std::vector<Eigen::VectorXd>& pit, std::size_t d) {
+  return pit.empty() ? nullptr : &pit[d];
+}
+
 // ---- Observed data, replicated data, and the gap measures -------------------------------------
 
 // The observed residuals under every draw: T_obs(d), and the posterior means of the values behind.
@@ -218,10 +272,12 @@ struct ObservedStatistics {
   std::vector<FamilyValues> T_by_draw;
   Eigen::MatrixXd per_sensor_mean;  // sensors x kPerSensorFamilies
   Eigen::VectorXd residual_mean;    // per sensor: posterior mean of mean_i r_im
+  Eigen::Vector4d latent_correlation_mean = Eigen::Vector4d::Zero();   // posterior mean of each pair's c
+  Eigen::Vector4d latent_statistic_mean = Eigen::Vector4d::Zero();     // posterior mean of each pair's N c²
 };
 
 ObservedStatistics evaluate_observed(const PosteriorDraws& draws, const Eigen::MatrixXd& lateral_directions,
-                                     ResidualStatistics& stats) {
+                                     ResidualStatistics& stats, LatentCovariates& latent) {
   const std::size_t D = draws.model_if.size();
   ObservedStatistics out;
   out.T_by_draw.resize(D);
@@ -234,11 +290,17 @@ ObservedStatistics evaluate_observed(const PosteriorDraws& draws, const Eigen::M
     out.T_by_draw[d] = stats.T;
     out.T_by_draw[d][family(CheckKind::kStiffnessDistribution)] =
         draws.stiffness_pit.empty() ? 0.0 : anderson_darling(draws.stiffness_pit[d]);
+    out.T_by_draw[d][family(CheckKind::kLatentCovariates)] =
+        latent.evaluate(pit_of(draws.stiffness_pit, d), pit_of(draws.tyre_stiffness_pit, d));
+    out.latent_correlation_mean += latent.correlation;
+    out.latent_statistic_mean += static_cast<double>(draws.observed.cols()) * latent.correlation.cwiseAbs2();
     out.per_sensor_mean += stats.per_sensor;
     out.residual_mean += stats.row_mean;
   }
   out.per_sensor_mean /= static_cast<double>(D);
   out.residual_mean /= static_cast<double>(D);
+  out.latent_correlation_mean /= static_cast<double>(D);
+  out.latent_statistic_mean /= static_cast<double>(D);
   return out;
 }
 
@@ -250,15 +312,17 @@ struct ReplicateTally {
 
 ReplicateTally replicate(const PosteriorDraws& draws, const Eigen::MatrixXd& lateral_directions,
                          const ObservedStatistics& observed, const CheckOptions& options,
-                         ResidualStatistics& stats) {
+                         ResidualStatistics& stats, LatentCovariates& latent) {
   const std::size_t D = draws.model_if.size();
   boost::random::mt19937_64 engine(options.seed);
   boost::random::normal_distribution<double> std_normal(0.0, 1.0);
   // The stiffness replicates have a stream of their own, so the residual families' replicates
   // are the same with or without them.
   boost::random::mt19937_64 fleet_engine(options.seed ^ 0x666c656574ULL /* "fleet" */);
+  // And the latent-covariate replicates theirs: adding the family changed no other family's p.
+  boost::random::mt19937_64 covariate_engine(options.seed ^ 0x6c6174636f76ULL /* "latcov" */);
   boost::random::uniform_01<double> uniform;
-  Eigen::VectorXd u(draws.observed.cols());
+  Eigen::VectorXd u(draws.observed.cols()), u_k(draws.observed.cols()), u_kt(draws.observed.cols());
   Eigen::MatrixXd residual(draws.observed.rows(), draws.observed.cols());
   ReplicateTally tally;
   for (int r = 0; r < options.replicates; ++r) {
@@ -274,6 +338,15 @@ ReplicateTally replicate(const PosteriorDraws& draws, const Eigen::MatrixXd& lat
     if (!draws.stiffness_pit.empty()) {
       for (Index i = 0; i < u.size(); ++i) u[i] = uniform(fleet_engine);
       T_rep[family(CheckKind::kStiffnessDistribution)] = anderson_darling(u);
+    }
+    const bool has_k = !draws.stiffness_pit.empty(), has_kt = !draws.tyre_stiffness_pit.empty();
+    if (has_k || has_kt) {
+      // A fresh fleet's (k, k_t) quantiles: iid U(0, 1), whatever the trucks' speeds and masses.
+      for (Index i = 0; i < u_k.size(); ++i) {
+        u_k[i] = uniform(covariate_engine);
+        u_kt[i] = uniform(covariate_engine);
+      }
+      T_rep[family(CheckKind::kLatentCovariates)] = latent.evaluate(has_k ? &u_k : nullptr, has_kt ? &u_kt : nullptr);
     }
     const FamilyValues& T_obs = observed.T_by_draw[d];
     for (int k = 0; k < kFamilies; ++k) {
@@ -306,6 +379,15 @@ CheckResult make_result(CheckKind kind, const ObservedStatistics& observed, cons
     Index worst = 0;
     values.cwiseAbs().maxCoeff(&worst);
     out.sensor = static_cast<int>(worst) + 1;
+  }
+  if (kind == CheckKind::kLatentCovariates && observed.latent_statistic_mean.maxCoeff() > 0.0) {
+    // The pair with the largest mean N c², and its posterior mean correlation.
+    Index pair = 0;
+    observed.latent_statistic_mean.maxCoeff(&pair);
+    std::ostringstream detail;
+    detail << "largest: " << kLatentPairNames[pair] << ", correlation " << std::showpos << std::fixed
+           << std::setprecision(2) << observed.latent_correlation_mean[pair] << " (posterior mean)";
+    out.detail = detail.str();
   }
   return out;
 }
@@ -357,8 +439,9 @@ CheckReport run_checks(const PosteriorDraws& draws, const CheckOptions& options)
     lateral_directions.col(d) = unit_direction(draws.lateral_m[static_cast<std::size_t>(d)]);
 
   ResidualStatistics stats(draws.speed_mps, draws.sprung_mass_kg, draws.observed.rows());
-  const ObservedStatistics observed = evaluate_observed(draws, lateral_directions, stats);
-  const ReplicateTally tally = replicate(draws, lateral_directions, observed, options, stats);
+  LatentCovariates latent(draws.speed_mps, draws.sprung_mass_kg);
+  const ObservedStatistics observed = evaluate_observed(draws, lateral_directions, stats, latent);
+  const ReplicateTally tally = replicate(draws, lateral_directions, observed, options, stats, latent);
 
   CheckReport report;
   for (int k = 0; k < kFamilies; ++k)

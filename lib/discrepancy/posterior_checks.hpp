@@ -14,11 +14,20 @@
 //   kStiffnessDistribution  T = A², the Anderson-Darling statistic of u_i = F(k_i | θ, ψ), each
 //                      truck's suspension stiffness under the draw's fleet distribution,
 //                      against U(0, 1) (a second class of trucks, say, bunches the u_i)
+//   kLatentCovariates  T = N max c², c = corr_i(u_i, x_i) over the four pairs of u = F(k_i | θ, ψ) or
+//                      F(k_t,i | θ) with x = speed or sprung mass. The model draws every truck's
+//                      (k, k_t) from one fleet distribution whatever its speed and load; a stiffness
+//                      that changes with either (a progressive spring under a heavier load, a tyre
+//                      stiffer at speed) is absorbed by each truck's own latents, so the residual
+//                      families cannot see it, but the latents then follow the covariate. One
+//                      posterior draw's u are iid U(0, 1) independent of the covariates under the
+//                      model (a pivotal quantity: Johnson 2007), so the test is exact per draw.
 //
 // The p-value compares T on the observed data with T on data replicated from the posterior:
 // replicate r uses draw d = r mod D and y_rep = f_d + σ_d ε with fresh ε, and
-// p = (1 + #{T_rep >= T_obs(d)}) / (1 + R). For the stiffness family the replicate is a fresh
-// fleet of N trucks from the draw's distribution, whose u_i are iid U(0, 1) whatever θ and ψ.
+// p = (1 + #{T_rep >= T_obs(d)}) / (1 + R). For the stiffness and latent-covariate families the
+// replicate is a fresh fleet of N trucks from the draw's distribution, whose u_i are iid U(0, 1)
+// whatever θ and ψ, and independent of the trucks' speeds and masses.
 // These realised discrepancies of the latents (Gelman, Meng & Stern 1996, §2.3) are
 // conservative: the posterior pulls each k_i towards the fleet distribution. A small p flags the family; the per-sensor values
 // behind T say where. The gap measures summarise the per-sensor mean misfit and the calibration
@@ -26,6 +35,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -45,6 +55,9 @@ struct PosteriorDraws {
   // per draw: F(k_i | θ, ψ) of every truck's k under the draw's fleet distribution. Empty: the
   // stiffness family is vacuous (T = 0, p = 1).
   std::vector<Eigen::VectorXd> stiffness_pit;
+  // per draw: F(k_t,i | θ) of every truck's tyre stiffness. Empty: the latent-covariate family
+  // uses k alone (and is vacuous when stiffness_pit is empty too).
+  std::vector<Eigen::VectorXd> tyre_stiffness_pit;
 };
 
 struct CheckResult {
@@ -55,6 +68,9 @@ struct CheckResult {
   bool flagged = false;            // p_value < alpha
   int sensor = 0;                  // 1-based sensor where the statistic is largest (0 if not per sensor)
   std::vector<double> per_sensor;  // the per-sensor values behind T (empty if not per sensor)
+  // Where a family without sensors points, in words (the latent-covariate family: which stiffness
+  // against which covariate, and the posterior mean correlation); empty otherwise.
+  std::string detail;
 };
 
 struct GapMeasures {

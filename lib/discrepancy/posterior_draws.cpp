@@ -35,6 +35,7 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::FleetSmc& fi
   out.lateral_m.assign(chosen.size(), Eigen::VectorXd());
   out.sigma_if.assign(chosen.size(), 0.0);
   out.stiffness_pit.assign(chosen.size(), Eigen::VectorXd());
+  out.tyre_stiffness_pit.assign(chosen.size(), Eigen::VectorXd());
   const fleet::ModelExtension* extension = target.extension();
   const smc::ParallelFor parallel(threads);
   parallel(static_cast<Eigen::Index>(chosen.size()), [&](Eigen::Index begin, Eigen::Index end) {
@@ -42,13 +43,15 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::FleetSmc& fi
       const Eigen::Index p = chosen[static_cast<std::size_t>(d)];
       const Eigen::VectorXd psi = target.psi().col(p);
       std::vector<fleet::ExtendedPass> passes;
-      Eigen::VectorXd lateral(n), pit(n);
+      Eigen::VectorXd lateral(n), pit(n), tyre_pit(n);
       const double K = target.theta()(fleet::kK, p), sigma_k = target.theta()(fleet::kSigmaK, p);
+      const double Kt = target.theta()(fleet::kKt, p), sigma_kt = target.theta()(fleet::kSigmaKt, p);
       for (Eigen::Index i = 0; i < n; ++i) {
         const double* x = target.latents().col(p).data() + 3 * i;
         lateral[i] = x[fleet::kLateral];
         pit[i] = extension != nullptr ? extension->stiffness_cdf(psi.data(), x[fleet::kStiffness], K, sigma_k)
                                       : fleet::normal_cdf((x[fleet::kStiffness] - K) / sigma_k);
+        tyre_pit[i] = fleet::normal_cdf((x[fleet::kTyreStiffness] - Kt) / sigma_kt);
         passes.push_back({fleet::base_pass(site, out.speed_mps[i], out.sprung_mass_kg[i], x[fleet::kStiffness],
                                            x[fleet::kTyreStiffness], lateral[i]),
                           psi.data()});
@@ -60,6 +63,7 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::FleetSmc& fi
       out.lateral_m[slot] = lateral;
       out.sigma_if[slot] = target.theta()(fleet::kSigmaIf, p);
       out.stiffness_pit[slot] = pit;
+      out.tyre_stiffness_pit[slot] = tyre_pit;
     }
   });
   return out;

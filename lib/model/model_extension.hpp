@@ -22,6 +22,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <iterator>
 #include <vector>
 
 #include <Eigen/Core>
@@ -41,11 +42,13 @@ enum class CheckKind : int {
   kLateral,          // residuals against the lateral position
   kAutocorrelation,  // lag-1 autocorrelation of residuals along the sensor array
   kStiffnessDistribution,  // the trucks' suspension stiffnesses against the fleet distribution
+  kLatentCovariates,       // the trucks' stiffnesses (k, k_t) against their speed and sprung mass
   kCount
 };
 inline constexpr std::string_view kCheckNames[] = {"sensor_mean", "sensor_dispersion", "speed",
                                                    "mass",        "lateral",           "autocorrelation",
-                                                   "stiffness_distribution"};
+                                                   "stiffness_distribution", "latent_covariates"};
+static_assert(std::size(kCheckNames) == static_cast<std::size_t>(CheckKind::kCount), "a name for every check");
 inline std::string_view check_name(CheckKind c) { return kCheckNames[static_cast<int>(c)]; }
 
 struct ExtensionParameter {
