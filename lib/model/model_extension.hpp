@@ -19,10 +19,10 @@
 #pragma once
 
 #include <functional>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <string_view>
-#include <iterator>
 #include <vector>
 
 #include <Eigen/Core>
