@@ -94,6 +94,19 @@ struct Cell {
   std::map<std::string, int> named;
 };
 
+// The runs tallied per (setting, fleet size).
+inline std::map<std::pair<std::string, int>, Cell> cells_of(const std::vector<Run>& runs) {
+  std::map<std::pair<std::string, int>, Cell> cells;
+  for (const auto& r : runs) {
+    Cell& c = cells[{r.setting, r.trucks}];
+    c.right += right(r);
+    ++c.runs;
+    c.wall_s += r.wall_s;
+    ++c.named[r.named];
+  }
+  return cells;
+}
+
 inline std::string percent(double p) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(1) << 100.0 * p;
@@ -111,14 +124,7 @@ inline std::string interval(int x, int n) {
 // every clean log. `settings` and `sizes` fix the order; cells without runs are left out.
 inline std::string tables(const std::vector<Run>& runs, const std::vector<std::string>& settings,
                           const std::vector<int>& sizes, const std::string& how) {
-  std::map<std::pair<std::string, int>, Cell> cells;
-  for (const auto& r : runs) {
-    Cell& c = cells[{r.setting, r.trucks}];
-    c.right += right(r);
-    ++c.runs;
-    c.wall_s += r.wall_s;
-    ++c.named[r.named];
-  }
+  const auto cells = cells_of(runs);
   std::set<std::string> commits;
   for (const auto& r : runs) commits.insert(r.commit);
   std::string commit_list;
@@ -185,15 +191,8 @@ inline std::string write_plot(const std::string& stem_path, const std::vector<Ru
     double size = 0.0;
     int trucks = 0, right = 0, runs = 0;
   };
-  std::map<std::pair<std::string, int>, Cell> cells;
-  for (const auto& r : runs) {
-    if (r.setting == "none") continue;
-    Cell& c = cells[{r.setting, r.trucks}];
-    c.right += right(r);
-    ++c.runs;
-  }
   std::map<std::string, std::vector<Point>> by_effect;  // in effect-name order
-  for (const auto& [k, c] : cells) {
+  for (const auto& [k, c] : cells_of(runs)) {
     const auto [parameter, size] = size_of(k.first);
     if (parameter.empty()) continue;
     by_effect[effect_of(k.first)].push_back({parameter, size, k.second, c.right, c.runs});
