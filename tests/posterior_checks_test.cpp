@@ -400,7 +400,8 @@ TEST_CASE("the latent-covariate family changes no other family's result and is v
   CHECK(check(b, CheckKind::kLatentCovariates).statistic > 0.0);
   PosteriorDraws neither = without;
   neither.stiffness_pit.clear();
-  const CheckResult& none = check(discrepancy::run_checks(neither, options), CheckKind::kLatentCovariates);
+  const CheckReport vacuous = discrepancy::run_checks(neither, options);  // named: `none` must not outlive it
+  const CheckResult& none = check(vacuous, CheckKind::kLatentCovariates);
   CHECK(none.statistic == 0.0);
   CHECK(none.p_value == 1.0);
   CHECK(none.detail.empty());
