@@ -2,6 +2,8 @@
 // 16 sensors at 76.0-98.5 m), for:
 //   single  - PassIntegrator::run, one truck at a time, including its discretisation;
 //   batched - PassIntegrator::run_batch on a fleet, including every truck's discretisation;
+//   table   - a truck table's passes (one truck at 64 (k, k_t) nodes, each on the same 8 lateral
+//             lines) through run_batch and through run_on_lines (a LineBundle of the 8 lines);
 //   floor   - the bare recurrence z <- Phi z + gamma r_j over the same 1970 steps with fixed
 //             per-truck matrices, laid out and vectorised the same way (structure of arrays
 //             over trucks, the same block size), no discretisation, no outputs, one shared
@@ -24,6 +26,7 @@
 #include <nlohmann/json.hpp>
 
 #include "vehicle/discretisation.hpp"
+#include "vehicle/line_bundle.hpp"
 #include "vehicle/pass_integrator.hpp"
 #include "vehicle/quarter_car.hpp"
 
@@ -146,6 +149,27 @@ int main(int argc, char** argv) {
       for (int r = 0; r < 4; ++r) floor_blocks[static_cast<std::size_t>(b)].gamma[r][t] = g[r];
     }
 
+  // A truck table's passes: one truck (the first) at 64 nodes around its (k, k_t), each on every line.
+  constexpr int kNodes = 64;
+  QuarterCarBatch nodes, node_lanes;
+  nodes.assign(kNodes, cars.car(0));
+  node_lanes.assign(kNodes * kLines, cars.car(0));
+  std::vector<WheelPath> node_paths;
+  std::vector<const double*> line_pointers;
+  for (const auto& line : lines) line_pointers.push_back(line.data());
+  for (int g = 0; g < kNodes; ++g) {
+    nodes.suspension_stiffness_npm[g] *= 0.8 + 0.4 * (g % 8) / 7.0;
+    nodes.tyre_stiffness_npm[g] *= 0.8 + 0.4 * (g / 8) / 7.0;
+    for (int l = 0; l < kLines; ++l) {
+      node_lanes.set_car(g * kLines + l, nodes.car(g));
+      node_paths.push_back(WheelPath{line_pointers[static_cast<std::size_t>(l)], line_pointers[static_cast<std::size_t>(l)], 0.0});
+    }
+  }
+  const LineBundle bundle(line_pointers, kSamples);
+  const Eigen::ArrayXd node_speeds = Eigen::ArrayXd::Constant(kNodes * kLines, speeds[0]);
+  Eigen::ArrayXXd table_out(16, kNodes * kLines);
+  std::vector<double> t_table_batch, t_table_lines;
+
   Eigen::ArrayXXd batch_out(16, trucks);
   Eigen::ArrayXd batch_min;
   Eigen::VectorXd single_out(16);
@@ -163,6 +187,16 @@ int main(int argc, char** argv) {
     sink += batch_min[0];
 
     t0 = Clock::now();
+    integrator.run_batch(node_lanes, node_speeds, node_paths, table_out);
+    t_table_batch.push_back(seconds_since(t0) / (kNodes * kLines));
+    sink += table_out(0, 0);
+
+    t0 = Clock::now();
+    integrator.run_on_lines(nodes, speeds[0], bundle, table_out);
+    t_table_lines.push_back(seconds_since(t0) / (kNodes * kLines));
+    sink += table_out(0, 0);
+
+    t0 = Clock::now();
     for (auto& block : floor_blocks) {
       for (int i = 0; i < 4; ++i)
         for (int t = 0; t < BS; ++t) block.z[i][t] = 0.0;
@@ -178,7 +212,8 @@ int main(int argc, char** argv) {
     t_disc.push_back(seconds_since(t0) / single_trucks);
   }
   const double us_single = 1e6 * median(t_single), us_batch = 1e6 * median(t_batch),
-               us_floor = 1e6 * median(t_floor), us_disc = 1e6 * median(t_disc);
+               us_floor = 1e6 * median(t_floor), us_disc = 1e6 * median(t_disc),
+               us_table_batch = 1e6 * median(t_table_batch), us_table_lines = 1e6 * median(t_table_lines);
 
 #if defined(__AVX512F__)
   const char* isa = "avx512";
@@ -200,10 +235,13 @@ int main(int argc, char** argv) {
   };
   row("single (run, incl. discretisation)", us_single);
   row("batched (run_batch, incl. discr.)", us_batch);
+  row("table: run_batch on the lines", us_table_batch);
+  row("table: run_on_lines (LineBundle)", us_table_lines);
   row("floor (bare recurrence, SoA)", us_floor);
   row("discretisation alone (per truck)", us_disc);
   std::printf("ratio batched / floor:  %.2f   (target <= 2.0)\n", us_batch / us_floor);
   std::printf("ratio single / batched: %.2f   (target >= 5.0)\n", us_single / us_batch);
+  std::printf("ratio table run_batch / run_on_lines: %.2f\n", us_table_batch / us_table_lines);
   std::fprintf(stderr, "(checksum %g)\n", sink);
 
   if (!json_path.empty()) {
@@ -216,9 +254,11 @@ int main(int argc, char** argv) {
     j["block_trucks"] = BS;
     j["isa"] = isa;
     j["us_per_pass"] = {
-        {"single", us_single}, {"batched", us_batch}, {"floor", us_floor}, {"discretisation", us_disc}};
+        {"single", us_single}, {"batched", us_batch}, {"floor", us_floor}, {"discretisation", us_disc},
+        {"table_run_batch", us_table_batch}, {"table_run_on_lines", us_table_lines}};
     j["ratio_batched_over_floor"] = us_batch / us_floor;
     j["ratio_single_over_batched"] = us_single / us_batch;
+    j["ratio_table_batch_over_lines"] = us_table_batch / us_table_lines;
     std::ofstream out(json_path);
     out << j.dump(2) << "\n";
     if (!out) {

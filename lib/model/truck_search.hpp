@@ -43,6 +43,33 @@ inline Eigen::ArrayXXd simulate(const site::Site& site, double speed_mps, double
   return out;
 }
 
+// Impact factors (sensors x (nodes x lines), node-major) of the truck at each (k[i], kt[i]) on
+// every line of `lines`: the same passes as simulate() with z on those lines, with the lines
+// read once for all nodes. Nodes are split over the threads in chunks (each pass is
+// independent, so the chunking changes no bit).
+inline Eigen::ArrayXXd simulate_on_lines(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                                         const std::vector<double>& k, const std::vector<double>& kt,
+                                         const vehicle::LineBundle& lines,
+                                         const util::ParallelRange& parallel = util::serial_range) {
+  const auto n = static_cast<Eigen::Index>(k.size());
+  const Eigen::Index per_node = lines.lines();
+  Eigen::ArrayXXd out(site.sensors(), n * per_node);
+  constexpr Eigen::Index kNodesPerChunk = 4;
+  const Eigen::Index chunks = (n + kNodesPerChunk - 1) / kNodesPerChunk;
+  parallel(chunks, [&](Eigen::Index cb, Eigen::Index ce) {
+    const Eigen::Index begin = cb * kNodesPerChunk, end = std::min(n, ce * kNodesPerChunk);
+    if (end <= begin) return;
+    const Eigen::ArrayXd mass = Eigen::ArrayXd::Constant(end - begin, sprung_mass_kg);
+    Eigen::ArrayXd kk(end - begin), kkt(end - begin);
+    for (Eigen::Index i = begin; i < end; ++i) {
+      kk[i - begin] = k[static_cast<std::size_t>(i)];
+      kkt[i - begin] = kt[static_cast<std::size_t>(i)];
+    }
+    site.impact_factors_on_lines(speed_mps, mass, kk, kkt, lines, out.middleCols(begin * per_node, (end - begin) * per_node));
+  });
+  return out;
+}
+
 inline void check_inputs(const site::Site& site, const Eigen::Ref<const Eigen::VectorXd>& y) {
   if (y.size() != site.sensors()) {
     throw UsageError("truck table: the record has " + std::to_string(y.size()) + " impact factors but the site has " +

@@ -22,6 +22,7 @@ using detail::check_inputs;
 using detail::Fitter;
 using detail::Point;
 using detail::simulate;
+using detail::simulate_on_lines;
 
 namespace {
 
@@ -179,9 +180,8 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
   int table_passes_extra = 0;
   std::vector<double> seg_min;
   {
-    std::vector<double> k(static_cast<std::size_t>(L), fit.stiffness_npm), kt(static_cast<std::size_t>(L), fit.tyre_stiffness_npm), z;
-    for (Eigen::Index l = 0; l < L; ++l) z.push_back(surface.lateral_m(l));
-    const Eigen::ArrayXXd ifs = simulate(site, speed_mps, sprung_mass_kg, k, kt, z, parallel);
+    const Eigen::ArrayXXd ifs = simulate_on_lines(site, speed_mps, sprung_mass_kg, {fit.stiffness_npm},
+                                                  {fit.tyre_stiffness_npm}, site.line_bundle(0, L), parallel);
     for (Eigen::Index j = 0; j + 1 < L; ++j) {
       const Eigen::VectorXd ea = impact_factors - ifs.col(j).matrix();
       const Eigen::VectorXd d = (ifs.col(j + 1) - ifs.col(j)).matrix();
@@ -291,6 +291,8 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
   for (std::size_t mi = 0; mi < modes.size(); ++mi) {
     const Mode& mode = modes[mi];
     const Eigen::Index first_line = mode.first_line, lines = mode.last_line - mode.first_line + 1;
+    // Every node of the mode runs on the same lines: read them once.
+    const vehicle::LineBundle mode_lines = site.line_bundle(first_line, lines);
     Eigen::Matrix2d precision = likelihood_cov.inverse();
     Eigen::Vector2d centre(mode.k_npm, mode.kt_npm);
     if (pop) {
@@ -327,16 +329,13 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
       if (std::find(pending.begin(), pending.end(), std::pair{fi, fj}) == pending.end()) pending.emplace_back(fi, fj);
     }
     for (int round = 0; !pending.empty() && round < 50; ++round) {
-      std::vector<double> k, kt, z;
+      std::vector<double> k, kt;
       for (const auto& [i, j] : pending) {
-        for (Eigen::Index l = 0; l < lines; ++l) {
-          k.push_back(lattice.k_at(i));
-          kt.push_back(lattice.kt_at(j));
-          z.push_back(surface.lateral_m(first_line + l));
-        }
+        k.push_back(lattice.k_at(i));
+        kt.push_back(lattice.kt_at(j));
       }
-      const Eigen::ArrayXXd ifs = simulate(site, speed_mps, sprung_mass_kg, k, kt, z, parallel);
-      table.passes += static_cast<int>(k.size());
+      const Eigen::ArrayXXd ifs = simulate_on_lines(site, speed_mps, sprung_mass_kg, k, kt, mode_lines, parallel);
+      table.passes += static_cast<int>(k.size() * static_cast<std::size_t>(lines));
       // Each node's z-integral is its own (in parallel, then gathered in order: the same bits).
       std::vector<std::vector<NodeResult>> results(pending.size());
       parallel(static_cast<Eigen::Index>(pending.size()), [&](Eigen::Index begin, Eigen::Index end) {

@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "road/envelopment.hpp"
 #include "road/wheel_path.hpp"
@@ -126,6 +128,33 @@ void Site::impact_factors_at(const vehicle::PassIntegrator& integrator, const Tr
   paths.reserve(static_cast<std::size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) paths.push_back(wheel_path(trucks.lateral_m[i]));
   integrator.run_batch(cars, trucks.speed_mps, paths, if_out, min_if);
+}
+
+vehicle::LineBundle Site::line_bundle(Eigen::Index first_line, Eigen::Index count) const {
+  if (first_line < 0 || count < 1 || first_line + count > surface_.lines())
+    throw std::out_of_range("Site::line_bundle: lines " + std::to_string(first_line) + " to " +
+                            std::to_string(first_line + count - 1) + " are not all on the surface's " +
+                            std::to_string(surface_.lines()) + " lines");
+  std::vector<const double*> lines;
+  for (Eigen::Index l = first_line; l < first_line + count; ++l) lines.push_back(surface_.line(l));
+  return vehicle::LineBundle(lines, surface_.samples());
+}
+
+void Site::impact_factors_on_lines(double speed_mps, const Eigen::ArrayXd& sprung_mass_kg,
+                                   const Eigen::ArrayXd& stiffness_npm, const Eigen::ArrayXd& tyre_stiffness_npm,
+                                   const vehicle::LineBundle& lines, Eigen::Ref<Eigen::ArrayXXd> if_out) const {
+  if (!integrator_.positions_m().empty()) check_measured_up_to(integrator_.positions_m().back());
+  const Eigen::Index n = sprung_mass_kg.size();
+  if (stiffness_npm.size() != n || tyre_stiffness_npm.size() != n)
+    throw std::invalid_argument("Site::impact_factors_on_lines: sprung_mass_kg, stiffness_npm and tyre_stiffness_npm differ in size");
+  vehicle::QuarterCarBatch cars;
+  cars.sprung_mass_kg = sprung_mass_kg;
+  cars.unsprung_mass_kg = Eigen::ArrayXd::Constant(n, options_.unsprung_mass_kg);
+  cars.suspension_stiffness_npm = stiffness_npm;
+  cars.suspension_damping_nspm = Eigen::ArrayXd::Constant(n, options_.suspension_damping_nspm);
+  cars.tyre_stiffness_npm = tyre_stiffness_npm;
+  cars.tyre_damping_nspm = Eigen::ArrayXd::Constant(n, options_.tyre_damping_nspm);
+  integrator_.run_on_lines(cars, speed_mps, lines, if_out);
 }
 
 std::string Site::compute_fingerprint() const {

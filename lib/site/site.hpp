@@ -68,6 +68,18 @@ class Site {
   void impact_factors(const TruckBatch& trucks, Eigen::Ref<Eigen::ArrayXXd> if_out,
                       Eigen::ArrayXd* min_if = nullptr) const;
 
+  // Lines first_line .. first_line + count - 1 of the surface, transposed for run_on_lines
+  // (std::out_of_range if they are not all on the surface).
+  vehicle::LineBundle line_bundle(Eigen::Index first_line, Eigen::Index count) const;
+
+  // Cars at one speed, car c with sprung mass, k and k_t from entry c of the arrays, each over
+  // every line of `lines` (exactly on the line): if_out is sensors x (cars x lines), car-major.
+  // The same impact factors as impact_factors() with z on those lines, faster when many cars
+  // share them (vehicle::PassIntegrator::run_on_lines).
+  void impact_factors_on_lines(double speed_mps, const Eigen::ArrayXd& sprung_mass_kg, const Eigen::ArrayXd& stiffness_npm,
+                               const Eigen::ArrayXd& tyre_stiffness_npm, const vehicle::LineBundle& lines,
+                               Eigen::Ref<Eigen::ArrayXXd> if_out) const;
+
   // The same with an integrator built for other output positions (e.g. predict anywhere); a
   // position whose pass would read a missing cell is a DataError, as in the constructor.
   void impact_factors_at(const vehicle::PassIntegrator& integrator, const TruckBatch& trucks,
