@@ -1,7 +1,7 @@
 // Consecutive surface lines, their heights transposed once to [sample][line] so that many cars
 // can run over the same lines (PassIntegrator::run_on_lines). A truck table runs every one of its
-// (k, k_t) nodes over the same few lateral lines; read through WheelPaths, each pass of each node
-// gathered its line again (the batched kernel's transpose, about a quarter of a pass's time).
+// (k, k_t) nodes over the same few lateral lines; read through WheelPaths, each block of passes
+// gathered and transposed its lanes' heights again.
 #pragma once
 
 #include <vector>

@@ -1,8 +1,9 @@
 // PassIntegrator::run_on_lines: many cars, each over every line of a LineBundle. A block's lanes
 // are lines and it runs a few cars on them at once, so a car's coefficients are the same in every
 // lane (held once, not once per lane as in run_batch's blocks) and the heights, already
-// transposed by the bundle, are read once for all the block's cars. Per lane it computes run_batch's expressions (pass_kernel.hpp), with no pass minimum
-// (the callers, truck tables, do not ask for it).
+// transposed by the bundle, are read once for all the block's cars. Per lane it computes
+// run_batch's expressions (pass_kernel.hpp), with no pass minimum (the callers, truck tables, do
+// not ask for it).
 #include <algorithm>
 #include <stdexcept>
 #include <string>
