@@ -117,17 +117,24 @@ void Site::impact_factors_at(const vehicle::PassIntegrator& integrator, const Tr
                              Eigen::Ref<Eigen::ArrayXXd> if_out, Eigen::ArrayXd* min_if) const {
   if (!integrator.positions_m().empty()) check_measured_up_to(integrator.positions_m().back());
   const Eigen::Index n = trucks.size();
-  vehicle::QuarterCarBatch cars;
-  cars.sprung_mass_kg = trucks.sprung_mass_kg;
-  cars.unsprung_mass_kg = Eigen::ArrayXd::Constant(n, options_.unsprung_mass_kg);
-  cars.suspension_stiffness_npm = trucks.stiffness_npm;
-  cars.suspension_damping_nspm = Eigen::ArrayXd::Constant(n, options_.suspension_damping_nspm);
-  cars.tyre_stiffness_npm = trucks.tyre_stiffness_npm;
-  cars.tyre_damping_nspm = Eigen::ArrayXd::Constant(n, options_.tyre_damping_nspm);
+  const vehicle::QuarterCarBatch cars = this->cars(trucks.sprung_mass_kg, trucks.stiffness_npm, trucks.tyre_stiffness_npm);
   std::vector<vehicle::WheelPath> paths;
   paths.reserve(static_cast<std::size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) paths.push_back(wheel_path(trucks.lateral_m[i]));
   integrator.run_batch(cars, trucks.speed_mps, paths, if_out, min_if);
+}
+
+vehicle::QuarterCarBatch Site::cars(const Eigen::ArrayXd& sprung_mass_kg, const Eigen::ArrayXd& stiffness_npm,
+                                    const Eigen::ArrayXd& tyre_stiffness_npm) const {
+  const Eigen::Index n = sprung_mass_kg.size();
+  vehicle::QuarterCarBatch cars;
+  cars.sprung_mass_kg = sprung_mass_kg;
+  cars.unsprung_mass_kg = Eigen::ArrayXd::Constant(n, options_.unsprung_mass_kg);
+  cars.suspension_stiffness_npm = stiffness_npm;
+  cars.suspension_damping_nspm = Eigen::ArrayXd::Constant(n, options_.suspension_damping_nspm);
+  cars.tyre_stiffness_npm = tyre_stiffness_npm;
+  cars.tyre_damping_nspm = Eigen::ArrayXd::Constant(n, options_.tyre_damping_nspm);
+  return cars;
 }
 
 vehicle::LineBundle Site::line_bundle(Eigen::Index first_line, Eigen::Index count) const {
@@ -147,14 +154,7 @@ void Site::impact_factors_on_lines(double speed_mps, const Eigen::ArrayXd& sprun
   const Eigen::Index n = sprung_mass_kg.size();
   if (stiffness_npm.size() != n || tyre_stiffness_npm.size() != n)
     throw std::invalid_argument("Site::impact_factors_on_lines: sprung_mass_kg, stiffness_npm and tyre_stiffness_npm differ in size");
-  vehicle::QuarterCarBatch cars;
-  cars.sprung_mass_kg = sprung_mass_kg;
-  cars.unsprung_mass_kg = Eigen::ArrayXd::Constant(n, options_.unsprung_mass_kg);
-  cars.suspension_stiffness_npm = stiffness_npm;
-  cars.suspension_damping_nspm = Eigen::ArrayXd::Constant(n, options_.suspension_damping_nspm);
-  cars.tyre_stiffness_npm = tyre_stiffness_npm;
-  cars.tyre_damping_nspm = Eigen::ArrayXd::Constant(n, options_.tyre_damping_nspm);
-  integrator_.run_on_lines(cars, speed_mps, lines, if_out);
+  integrator_.run_on_lines(cars(sprung_mass_kg, stiffness_npm, tyre_stiffness_npm), speed_mps, lines, if_out);
 }
 
 std::string Site::compute_fingerprint() const {

@@ -93,6 +93,11 @@ class Site {
   const std::string& fingerprint() const { return fingerprint_; }
 
  private:
+  // The quarter cars of trucks with these masses and stiffnesses and the site's constants (one
+  // copy for impact_factors_at and impact_factors_on_lines).
+  vehicle::QuarterCarBatch cars(const Eigen::ArrayXd& sprung_mass_kg, const Eigen::ArrayXd& stiffness_npm,
+                                const Eigen::ArrayXd& tyre_stiffness_npm) const;
+
   // DataError unless a pass to x_m reads only measured road.
   void check_measured_up_to(double x_m) const;
 
