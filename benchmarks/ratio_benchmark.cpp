@@ -21,13 +21,16 @@
 //       its final sweeps, against re-running the MCMC to ESS 400.
 //   (d) accuracy (issue 14 item 5, accuracy.hpp): each SMC seed's posterior mean and sd against the
 //       whole kept MCMC chain, which is the reference only if its ESS is >= 1,000 on all 7.
+//       --reference FILE (a JSON of mcmc_reference_benchmark, same fleet, same data seed 1) judges
+//       against that stored chain instead and runs no MCMC here: accuracy only, no ratio (at
+//       10,000 trucks a chain long enough to judge by takes 1.5 h, beyond a side-by-side run).
 // Data (--fleet, fleet_presets.hpp): the Table 1 fleet on AS1 with σ_IF = 0.02 (default), or the
 // second fleet on AS2 with σ_IF = 0.03; seed 1 for the fleet draw and the noise. The machine may
 // be shared: the 1-minute load average is recorded before and after each N.
 //
 //   ratio_benchmark [--fleet table1|second] [--trucks 100,1000] [--trucks N ...] [--seeds 8]
 //                   [--json FILE] [--markdown FILE] [--mcmc-iterations I --mcmc-burn-in B]
-//                   [--commit HASH] [--check-accuracy]
+//                   [--commit HASH] [--check-accuracy] [--reference FILE]
 // Default MCMC lengths: 40,000 / 5,000 sweeps at N <= 100, 45,000 / 5,000 above (at N = 1,000,
 // 15,000 kept sweeps gave ESS 647 on sigma_kt; 40,000 kept make the reference's 1,000 with room).
 // The results files are rewritten after every N, so an interrupted run keeps the finished ones.
@@ -59,11 +62,13 @@
 #include "run_info.hpp"
 #include "seed_scatter.hpp"
 #include "smc_fit.hpp"
+#include "stored_reference.hpp"
 #include "util/effective_sample_size.hpp"
 
 using namespace ssrfleet;
 using namespace ssrfleet::bench::ratio;
 using bench::fmt;
+using bench::fmt_g;
 using bench::load_average_1min;
 using bench::run_command;
 using bench::utc_now;
@@ -101,7 +106,13 @@ SmcResult run_smc(const site::Site& site, const fleet::SimulatedLog& log, const 
     r.one_more_truck_s.push_back(seconds_since(t1));
     std::cerr << "  SMC seed " << kFirstSmcSeed + s << ": fit " << fmt(wall, 2) << " s (tables "
               << fmt(r.table_s.back(), 2) << " s), one more truck "
-              << fmt(1e3 * r.one_more_truck_s.back(), 1) << " ms\n";
+              << fmt(1e3 * r.one_more_truck_s.back(), 1) << " ms; posterior mean (sd):";
+    // Every seed's posterior on the log as it finishes: a long run stopped part-way still says
+    // what its finished fits found.
+    for (int h = 0; h < fleet::kHyperCount; ++h)
+      std::cerr << " " << fleet::kHyperNames[h] << " " << fmt_g(summary[static_cast<std::size_t>(h)].mean) << " ("
+                << fmt_g(summary[static_cast<std::size_t>(h)].sd) << ")";
+    std::cerr << "\n";
   }
   for (double w : r.wall_s) r.mean_wall_s += w / seeds;
   for (double t : r.table_s) r.mean_table_s += t / seeds;
@@ -205,8 +216,30 @@ SmcResult failed_smc(const std::string& error, int seeds) {
 // above, 45,000 (40,000 kept), since 15,000 kept gave 647 on sigma_kt at N = 1,000.
 int default_mcmc_iterations(int N) { return N <= 100 ? 40000 : 45000; }
 
+// A stored chain standing in for the one run here: its posterior and ESS, no times (NaN).
+McmcResult from_stored_reference(const bench::StoredReference& ref) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  McmcResult r;
+  r.reference_file = ref.path;
+  r.reference_seed = ref.seed;
+  r.reference_commit = ref.commit;
+  r.iterations = ref.iterations;
+  r.burn_in = ref.burn_in;
+  r.wall_s = r.init_s = r.per_sweep_s = nan;
+  r.mean = ref.mean;
+  r.sd = ref.sd;
+  r.ess_full = ref.ess;
+  r.min_ess_full = std::numeric_limits<double>::infinity();
+  for (int h = 0; h < fleet::kHyperCount; ++h)
+    if (!(ref.ess[static_cast<std::size_t>(h)] >= r.min_ess_full)) {
+      r.min_ess_full = ref.ess[static_cast<std::size_t>(h)];
+      r.worst_full = h;
+    }
+  return r;
+}
+
 NResult measure(const site::Site& site, const bench::FleetPreset& preset, int N, int seeds, int mcmc_iterations,
-                int mcmc_burn_in) {
+                int mcmc_burn_in, const std::optional<bench::StoredReference>& stored) {
   NResult r;
   r.trucks = N;
   r.started = utc_now();
@@ -223,10 +256,14 @@ NResult measure(const site::Site& site, const bench::FleetPreset& preset, int N,
     r.smc = failed_smc(e.what(), seeds);
     std::cerr << "  SMC FAILED: " << r.smc.error << "\n";
   }
-  const int it = mcmc_iterations > 0 ? mcmc_iterations : default_mcmc_iterations(N);
-  const int bi = mcmc_burn_in > 0 ? mcmc_burn_in : 5000;
-  std::cerr << "N=" << N << ": MCMC, " << it << " sweeps, burn-in " << bi << "\n";
-  r.mcmc = run_mcmc(site, log, it, bi);
+  if (stored) {
+    r.mcmc = from_stored_reference(*stored);
+  } else {
+    const int it = mcmc_iterations > 0 ? mcmc_iterations : default_mcmc_iterations(N);
+    const int bi = mcmc_burn_in > 0 ? mcmc_burn_in : 5000;
+    std::cerr << "N=" << N << ": MCMC, " << it << " sweeps, burn-in " << bi << "\n";
+    r.mcmc = run_mcmc(site, log, it, bi);
+  }
   r.load_after = load_average_1min();
   r.finished = utc_now();
   const double mcmc_t = r.mcmc.reached ? r.mcmc.time_to_400_s : r.mcmc.extrapolated_time_s;
@@ -258,7 +295,10 @@ void print_summary(const NResult& r) {
               << "       the last cloud alone: smallest equivalent ESS " << fmt(s.scatter_last.min_ess, 0) << " ("
               << fleet::kHyperNames[s.scatter_last.worst] << "), time to ESS 400 " << fmt(s.time_to_400_last_s, 2)
               << " s, ratio " << fmt(r.ratio_last, 2) << "\n";
-  if (m.reached)
+  if (!m.reference_file.empty())
+    std::cout << "  MCMC: not run; stored reference " << m.reference_file << " (" << m.iterations << " sweeps, burn-in "
+              << m.burn_in << ", chain seed " << m.reference_seed << "): no ratio\n";
+  else if (m.reached)
     std::cout << "  MCMC: ESS 400 on all 7 after " << m.kept_sweeps_to_400 << " kept sweeps (+" << m.burn_in
               << " burn-in): time to ESS 400 " << fmt(m.time_to_400_s, 2) << " s (init " << fmt(m.init_s, 2)
               << " s, " << fmt(1e3 * m.per_sweep_s, 3) << " ms/sweep, whole chain " << fmt(m.wall_s, 1) << " s)\n";
@@ -312,7 +352,7 @@ int main(int argc, char** argv) {
   std::vector<int> trucks;
   int seeds = 8, mcmc_iterations = 0, mcmc_burn_in = 0;
   bool check_accuracy = false;
-  std::string json_path, md_path, commit, fleet_name = "table1";
+  std::string json_path, md_path, commit, fleet_name = "table1", reference_path;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
@@ -334,10 +374,12 @@ int main(int argc, char** argv) {
       commit = next();
     } else if (a == "--check-accuracy") {
       check_accuracy = true;
+    } else if (a == "--reference") {
+      reference_path = next();
     } else {
       std::cerr << "usage: ratio_benchmark [--fleet table1|second] [--trucks 100,1000] [--seeds 8] [--json FILE]\n"
                    "                       [--markdown FILE] [--mcmc-iterations I --mcmc-burn-in B] [--commit HASH]\n"
-                   "                       [--check-accuracy]\n";
+                   "                       [--check-accuracy] [--reference MCMC_REFERENCE_JSON]\n";
       return 2;
     }
   }
@@ -345,6 +387,26 @@ int main(int argc, char** argv) {
   if (!preset) {
     std::cerr << "ratio_benchmark: --fleet must be one of " << bench::fleet_preset_names() << "\n";
     return 2;
+  }
+  std::optional<bench::StoredReference> stored;
+  if (!reference_path.empty()) {
+    try {
+      stored = bench::read_stored_reference(reference_path);
+    } catch (const std::exception& e) {
+      std::cerr << "ratio_benchmark: " << e.what() << "\n";
+      return 2;
+    }
+    if (stored->fleet != preset->name) {
+      std::cerr << "ratio_benchmark: reference '" << reference_path << "' is for fleet '" << stored->fleet
+                << "', not --fleet " << preset->name << "\n";
+      return 2;
+    }
+    if (trucks.empty()) trucks = {stored->trucks};
+    if (trucks.size() != 1 || trucks[0] != stored->trucks) {
+      std::cerr << "ratio_benchmark: reference '" << reference_path << "' is for " << stored->trucks
+                << " trucks: --trucks must be that one N\n";
+      return 2;
+    }
   }
   if (trucks.empty()) trucks = {100, 1000};
   if (seeds < 2) {
@@ -358,7 +420,7 @@ int main(int argc, char** argv) {
   const site::Site site(road::preset_surface(preset->road), site::SiteOptions{});
   std::vector<NResult> results;
   for (int N : trucks) {
-    results.push_back(measure(site, *preset, N, seeds, mcmc_iterations, mcmc_burn_in));
+    results.push_back(measure(site, *preset, N, seeds, mcmc_iterations, mcmc_burn_in, stored));
     print_summary(results.back());
     write_results(results, trucks, seeds, *preset, commit, nproc, started, json_path, md_path);
   }

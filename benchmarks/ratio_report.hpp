@@ -65,6 +65,12 @@ struct McmcResult {
   double extrapolated_time_s = std::numeric_limits<double>::quiet_NaN();
   std::array<double, fleet::kHyperCount> mean{}, sd{};
   std::vector<std::pair<int, double>> min_ess_trace;  // (kept sweeps, min ESS) every 500
+  // Set when no chain ran here and a stored reference (--reference, stored_reference.hpp) stands
+  // in: only iterations, burn_in, mean, sd, ess_full, min_ess_full and worst_full are filled; every
+  // time is NaN, so no ratio is reported.
+  std::string reference_file;
+  std::uint64_t reference_seed = 0;
+  std::string reference_commit;
 };
 
 struct NResult {
@@ -140,11 +146,15 @@ inline void write_results(const std::vector<NResult>& results, const std::vector
                 {"one_more_truck_max_s", s.one_more_max_s}};
     nlohmann::json trace = nlohmann::json::array();
     for (const auto& [len, ess] : m.min_ess_trace) trace.push_back({len, num(ess)});
-    e["mcmc"] = {{"iterations", m.iterations},
+    e["mcmc"] = {{"source", m.reference_file.empty() ? nlohmann::json("run here")
+                                                    : nlohmann::json({{"stored_reference", m.reference_file},
+                                                                      {"chain_seed", m.reference_seed},
+                                                                      {"commit", m.reference_commit}})},
+                 {"iterations", m.iterations},
                  {"burn_in", m.burn_in},
-                 {"wall_s", m.wall_s},
-                 {"init_s", m.init_s},
-                 {"per_sweep_s", m.per_sweep_s},
+                 {"wall_s", num(m.wall_s)},
+                 {"init_s", num(m.init_s)},
+                 {"per_sweep_s", num(m.per_sweep_s)},
                  {"reached_ess_400", m.reached},
                  {"kept_sweeps_to_ess_400", m.reached ? nlohmann::json(m.kept_sweeps_to_400) : nlohmann::json(nullptr)},
                  {"sweeps_to_ess_400_incl_burn_in",
@@ -204,15 +214,17 @@ inline void write_results(const std::vector<NResult>& results, const std::vector
   for (const auto& r : results) {
     const auto& s = r.smc;
     const auto& m = r.mcmc;
-    std::string mc = m.reached ? fmt(m.time_to_400_s, 1) + " (" + std::to_string(m.burn_in + m.kept_sweeps_to_400) + ")"
-                               : "not reached in " + std::to_string(m.iterations) + " (extrap. " +
-                                     fmt(m.extrapolated_time_s, 1) + ")";
+    std::string mc = !m.reference_file.empty()
+                         ? "not run (stored reference)"
+                     : m.reached ? fmt(m.time_to_400_s, 1) + " (" + std::to_string(m.burn_in + m.kept_sweeps_to_400) + ")"
+                                 : "not reached in " + std::to_string(m.iterations) + " (extrap. " +
+                                       fmt(m.extrapolated_time_s, 1) + ")";
     f << "| " << r.trucks << " | " << fmt(s.mean_wall_s, 2) << " (" << fmt(s.mean_table_s, 2) << ") | "
       << fmt(s.scatter.min_ess, 0) << " ("
       << fleet::kHyperNames[s.scatter.worst] << ") [" << fmt(s.scatter.min_ess_lo90, 0) << ", "
       << fmt(s.scatter.min_ess_hi90, 0) << "] | " << fmt(s.time_to_400_s, 2) << " [" << fmt(s.time_to_400_lo_s, 2)
       << ", " << fmt(s.time_to_400_hi_s, 2) << "] | " << mc << " | " << fmt(r.ratio, 2) << " [" << fmt(r.ratio_lo, 2)
-      << ", " << fmt(r.ratio_hi, 2) << "]" << (m.reached ? "" : " (extrap.)") << " | "
+      << ", " << fmt(r.ratio_hi, 2) << "]" << (m.reached || !m.reference_file.empty() ? "" : " (extrap.)") << " | "
       << (r.trucks <= 100 ? ">= 1" : (r.trucks >= 10000 ? ">= 10" : "")) << " | " << fmt(s.one_more_mean_s, 4)
       << " (max " << fmt(s.one_more_max_s, 4) << ") | " << fmt(r.one_more_ratio, 0) << " | " << fmt(r.load_before, 2)
       << " / " << fmt(r.load_after, 2) << " | " << fmt(s.scatter_last.min_ess, 0) << " ("
@@ -230,8 +242,13 @@ inline void write_results(const std::vector<NResult>& results, const std::vector
     if (!s.error.empty()) f << "**SMC FAILED** (no posterior, no ratio): `" << s.error << "`\n\n";
     f << "SMC wall per fit (s):";
     for (double w : s.wall_s) f << " " << fmt(w, 2);
-    f << ". MCMC: " << m.iterations << " sweeps (burn-in " << m.burn_in << "), wall " << fmt(m.wall_s, 1)
-      << " s, init " << fmt(m.init_s, 2) << " s, " << fmt(1e3 * m.per_sweep_s, 3) << " ms/sweep.\n\n";
+    if (m.reference_file.empty())
+      f << ". MCMC: " << m.iterations << " sweeps (burn-in " << m.burn_in << "), wall " << fmt(m.wall_s, 1)
+        << " s, init " << fmt(m.init_s, 2) << " s, " << fmt(1e3 * m.per_sweep_s, 3) << " ms/sweep.\n\n";
+    else
+      f << ". MCMC: not run here; the stored reference `" << m.reference_file << "` (" << m.iterations
+        << " sweeps, burn-in " << m.burn_in << ", chain seed " << m.reference_seed << ", commit " << m.reference_commit
+        << ") stands for it: no ratio.\n\n";
     f << "| parameter | truth | SMC equiv. ESS | SMC posterior mean | MCMC ESS at the 400 prefix | MCMC ESS full "
          "chain | MCMC posterior mean | MCMC posterior sd | SMC posterior sd |\n|---|---|---|---|---|---|---|---|---|\n";
     const fleet::HyperVector truth = preset.truth();
