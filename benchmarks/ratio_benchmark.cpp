@@ -308,7 +308,7 @@ void print_summary(const NResult& r) {
               << fmt(m.extrapolated_sweeps, 0) << " kept sweeps, " << fmt(m.extrapolated_time_s, 2) << " s\n";
   std::cout << "  full-chain min ESS " << fmt(m.min_ess_full, 0) << " (" << fleet::kHyperNames[m.worst_full]
             << ")\n  ratio MCMC/SMC " << fmt(r.ratio, 2) << " [" << fmt(r.ratio_lo, 2) << ", "
-            << fmt(r.ratio_hi, 2) << "]" << (m.reached ? "" : " (extrapolated)") << "\n"
+            << fmt(r.ratio_hi, 2) << "]" << (m.reached || !m.reference_file.empty() ? "" : " (extrapolated)") << "\n"
             << "  one more truck (SMC absorb) mean " << fmt(1e3 * s.one_more_mean_s, 2) << " ms (max "
             << fmt(1e3 * s.one_more_max_s, 2) << " ms); MCMC re-run to 400 / one absorb = "
             << fmt(r.one_more_ratio, 0) << "\n"
