@@ -88,7 +88,10 @@ struct NResult {
 
 inline void write_results(const std::vector<NResult>& results, const std::vector<int>& requested, int seeds,
                           const FleetPreset& preset, const std::string& commit, long nproc, const std::string& started,
-                          const std::string& json_path, const std::string& md_path) {
+                          const std::string& json_path, const std::string& md_path,
+                          const std::string& smc_options_note = "") {
+  // "default", or the MarginalTarget options a run overrode (ratio_benchmark --lateral-piece-fraction ...).
+  const std::string smc_options = smc_options_note.empty() ? "default options" : "default options but" + smc_options_note;
   nlohmann::json j;
   j["benchmark"] = "ratio";
   j["started_utc"] = started;
@@ -103,7 +106,7 @@ inline void write_results(const std::vector<NResult>& results, const std::vector
                    {"data_seed", kDataSeed},
                    {"smc", {{"particles", fleet::MarginalSmc::Options{}.sampler.particles}, {"threads", 2},
                             {"seeds", seeds}, {"first_seed", kFirstSmcSeed},
-                            {"final_sweeps", fleet::MarginalSmc::Options{}.sampler.schedule.final_sweeps}, {"options", "default"}}},
+                            {"final_sweeps", fleet::MarginalSmc::Options{}.sampler.schedule.final_sweeps}, {"options", smc_options}}},
                    {"mcmc", {{"threads", 2}, {"seed", 1}, {"options", "default (interweave K_t/sigma_kt, best-fit start)"},
                              {"ess_check_every_sweeps", kCheckEvery}}},
                    {"target_ess", kTargetEss},
@@ -191,7 +194,7 @@ inline void write_results(const std::vector<NResult>& results, const std::vector
     << preset.sigma_if << ", data seed " << kDataSeed << ". Truth (generating parameters): " << truth_line(preset)
     << ". Commit " << commit << ", nproc " << nproc << ", started " << started << ", written " << utc_now()
     << ". The machine may be shared: see the load.\n\n";
-  f << "- SMC: fleet::MarginalSmc, default options, 1,024 particles, 2 threads, replay then rejuvenate("
+  f << "- SMC: fleet::MarginalSmc, " << smc_options << ", 1,024 particles, 2 threads, replay then rejuvenate("
     << fleet::MarginalSmc::Options{}.sampler.schedule.final_sweeps << "); " << seeds
     << " seeds (100, ...) on the same data. Equivalent ESS = (mean posterior sd)^2 / (variance of the "
     << seeds << " posterior means), the smallest over the 7. **SMC time to ESS 400 = T + (mean wall per fit - T) x 400 / "
