@@ -90,7 +90,7 @@ inline void write_results(const std::vector<NResult>& results, const std::vector
                           const FleetPreset& preset, const std::string& commit, long nproc, const std::string& started,
                           const std::string& json_path, const std::string& md_path,
                           const std::string& smc_options_note = "") {
-  // "default", or the MarginalTarget options a run overrode (ratio_benchmark --lateral-piece-fraction ...).
+  // "default options", or which MarginalTarget options a run overrode (ratio_benchmark --lateral-piece-fraction ...).
   const std::string smc_options = smc_options_note.empty() ? "default options" : "default options but" + smc_options_note;
   nlohmann::json j;
   j["benchmark"] = "ratio";
