@@ -44,6 +44,15 @@ inline double required_number(const nlohmann::json& j, const std::string& key, c
   return v.get<double>();
 }
 
+// A whole number in [0, max]: converting a double outside the target's range is undefined.
+inline double required_count(const nlohmann::json& j, const std::string& key, const std::string& path, double max) {
+  const double v = required_number(j, key, path, "");
+  if (!(v >= 0.0 && v <= max && v == std::floor(v)))
+    throw std::runtime_error("reference '" + path + "': field '" + key + "' is not a whole number in [0, " +
+                             std::to_string(static_cast<long long>(max)) + "]");
+  return v;
+}
+
 }  // namespace detail
 
 inline StoredReference read_stored_reference(const std::string& path) {
@@ -66,10 +75,11 @@ inline StoredReference read_stored_reference(const std::string& path) {
   const nlohmann::json& fleet_name = required_field(j, "fleet", path, "");
   if (!fleet_name.is_string()) throw std::runtime_error("reference '" + path + "': field 'fleet' is not a string");
   r.fleet = fleet_name.get<std::string>();
-  r.trucks = static_cast<int>(required_number(j, "trucks", path, ""));
-  r.iterations = static_cast<int>(required_number(j, "iterations", path, ""));
-  r.burn_in = static_cast<int>(required_number(j, "burn_in", path, ""));
-  r.seed = static_cast<std::uint64_t>(required_number(j, "seed", path, ""));
+  constexpr double kIntMax = 2147483647.0, kSeedMax = 9007199254740992.0;  // 2^53: exact in a double
+  r.trucks = static_cast<int>(detail::required_count(j, "trucks", path, kIntMax));
+  r.iterations = static_cast<int>(detail::required_count(j, "iterations", path, kIntMax));
+  r.burn_in = static_cast<int>(detail::required_count(j, "burn_in", path, kIntMax));
+  r.seed = static_cast<std::uint64_t>(detail::required_count(j, "seed", path, kSeedMax));
   if (j.contains("commit") && j["commit"].is_string()) r.commit = j["commit"].get<std::string>();
   const nlohmann::json& post = required_field(j, "posterior", path, "");
   for (int h = 0; h < fleet::kHyperCount; ++h) {

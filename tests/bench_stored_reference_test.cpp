@@ -92,6 +92,12 @@ TEST_CASE("a file that is not a stored MCMC reference is refused naming the fiel
   j["posterior"]["K"]["mean"] = "379080";
   CHECK_THAT(refusal(dir, j), Catch::Contains("'posterior.K.mean' is not a finite number"));
   j = reference_json();
+  j["trucks"] = 1e300;
+  CHECK_THAT(refusal(dir, j), Catch::Contains("field 'trucks' is not a whole number"));
+  j = reference_json();
+  j["seed"] = -7;
+  CHECK_THAT(refusal(dir, j), Catch::Contains("field 'seed' is not a whole number"));
+  j = reference_json();
   j["posterior"]["sigma_if"]["sd"] = 0.0;
   CHECK_THAT(refusal(dir, j), Catch::Contains("'posterior.sigma_if.sd' is not positive"));
   CHECK_THAT(refusal(dir, j), Catch::Contains(dir.file("ref.json")));
