@@ -103,6 +103,17 @@ TEST_CASE("diagnose names a second class of stiffer trucks in a 40-truck log", "
   require_found(r, setting);
 }
 
+TEST_CASE("a refit whose cloud collapses to one point goes on instead of throwing", "[discrepancy][diagnose]") {
+  // Found by the power campaign (diagnose_benchmark, 50 trucks, seed 108): one candidate's refit
+  // resampled every particle from one, and the (K_t, log σ_kt) interweave, a random walk scaled on
+  // the cloud's spread, threw "the particle cloud has collapsed to one point". It now skips such a
+  // sweep and the Gibbs moves restore the spread; the refit goes on to the right answer.
+  const std::string setting = "second_class:share=0.3,sigma_k2=100000,K2=1000000";
+  discrepancy::DiagnoseResult r;
+  REQUIRE_NOTHROW(r = discrepancy::diagnose(as1(), hidden_effect_log(setting, 50, 108), options(256, 108)));
+  CHECK(r.effect == "second_class");
+}
+
 TEST_CASE("diagnose answers none on a 40-truck log with no effect", "[discrepancy][diagnose]") {
   const auto r = discrepancy::diagnose(as1(), hidden_effect_log("", 40, 5), options(256, 5));
   INFO(discrepancy::diagnosis_to_json(r).dump(1));

@@ -236,8 +236,9 @@ class FleetTarget final : public smc::TemperedModel {
   void extension_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel, PsiMove move);
   // With an extension's stiffness distribution (K, σ_k) have no standard conditional: they move,
   // with ψ when ψ does not touch the forward model, by kStiffnessSteps random-walk MH steps per
-  // call on their conditional given every kept truck's k (no integrator call).
-  void stiffness_distribution_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
+  // call on their conditional given every kept truck's k (no integrator call). False when it did
+  // not run (no truck, or every particle the same point: nothing to scale a walk on).
+  bool stiffness_distribution_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
   static constexpr int kStiffnessSteps = 3;
   // One ancillary (non-centred) MH step per particle on (K_t, σ_kt), Yu & Meng's interweaving as
   // the batch MCMC does it (batch_mcmc_interweave.hpp has the derivation): a random walk in
@@ -246,7 +247,8 @@ class FleetTarget final : public smc::TemperedModel {
   // The centred Gibbs draw of "theta" cannot leave the funnel where every k_t sits at K_t and
   // σ_kt is small (speed_bias, whose factor trades against K_t, showed it: one SMC seed kept 10 %
   // of its weight there, the MCMC 0.8 %). Writes log γ and ℓ of every particle that moved.
-  // Does nothing outside the exact regime (a retired truck's k_t cannot be re-simulated).
+  // Does nothing outside the exact regime (a retired truck's k_t cannot be re-simulated), nor
+  // when every particle is the same point (K_t, σ_kt): false then.
   bool tyre_stiffness_interweave(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
                                  Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik);
 

@@ -21,6 +21,19 @@
 
 namespace ssrfleet::fleet {
 
+namespace {
+
+// Whether the particles differ anywhere in `state` (coordinates × particles). After a resampling
+// from one dominant weight every particle is a copy of one, and a random walk scaled on the
+// cloud's spread has no scale: such a move is skipped for that sweep (the Gibbs moves of θ and the
+// latents' moves keep the chain going and restore the spread; skipping a kernel keeps the target
+// invariant). Seen in a diagnose refit of a 50-truck log with a second class of trucks.
+bool cloud_has_spread(const Eigen::Ref<const Eigen::MatrixXd>& state) {
+  return (state.rowwise().maxCoeff() - state.rowwise().minCoeff()).maxCoeff() > 0.0;
+}
+
+}  // namespace
+
 using detail::standard_normal;
 
 std::vector<std::string> FleetTarget::model_moves() const {
@@ -59,7 +72,7 @@ smc::TemperedModel::ModelMoveResult FleetTarget::run_model_move(int move, int ru
       // Below φ = 1 the target holds the newest truck's proposal, built at the stage's θ
       // (Options::proposals): θ waits for φ = 1.
       if (!stiffness_edited() || (newest_from_proposals_ && phi < 1.0)) return {false};
-      stiffness_distribution_sweep(rngs.child(4), parallel);
+      if (!stiffness_distribution_sweep(rngs.child(4), parallel)) return {false};
       return {true, stiffness_acceptance_};
     case 4:  // theta
       if (newest_from_proposals_ && phi < 1.0) return {false};  // as "stiffness distribution"
@@ -161,6 +174,7 @@ bool FleetTarget::tyre_stiffness_interweave(double phi, const smc::RngFactory& r
   Eigen::MatrixXd state(2, P);
   state.row(0) = theta_.row(kKt);
   state.row(1) = theta_.row(kSigmaKt).array().log().matrix();
+  if (!cloud_has_spread(state)) return false;
   const Eigen::MatrixXd chol =
       Eigen::LLT<Eigen::MatrixXd>(smc::proposal_covariance(state, Eigen::ArrayXd::Ones(P), 2.38 * interweave_scale_))
           .matrixL();
@@ -378,16 +392,17 @@ void FleetTarget::extension_sweep(const smc::RngFactory& rngs, const smc::Parall
   extension_scale_ = smc::tuned_scale_factor(extension_scale_, extension_acceptance_);
 }
 
-void FleetTarget::stiffness_distribution_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel) {
+bool FleetTarget::stiffness_distribution_sweep(const smc::RngFactory& rngs, const smc::ParallelFor& parallel) {
   const ModelExtension& ext = *options_.extension;
   const Eigen::Index P = options_.particles, n = kept_trucks();
-  if (n == 0) return;
+  if (n == 0) return false;
   const bool with_psi = !ext.edits_forward();  // otherwise ψ moves in extension_sweep, with the likelihood
   const Eigen::Index d = 2 + (with_psi ? psi_.rows() : 0);
   Eigen::MatrixXd state(d, P);  // (K, σ_k[, ψ]) per particle
   state.row(0) = theta_.row(kK);
   state.row(1) = theta_.row(kSigmaK);
   if (with_psi) state.bottomRows(psi_.rows()) = psi_;
+  if (!cloud_has_spread(state)) return false;
   const Eigen::MatrixXd chol =
       Eigen::LLT<Eigen::MatrixXd>(smc::proposal_covariance(state, Eigen::ArrayXd::Ones(P), 2.38 * stiffness_scale_)).matrixL();
   const auto& prior = options_.prior;
@@ -442,6 +457,7 @@ void FleetTarget::stiffness_distribution_sweep(const smc::RngFactory& rngs, cons
         static_cast<double>(std::count(jumped.begin(), jumped.end(), 1)) / static_cast<double>(P);
   }
   stiffness_scale_ = smc::tuned_scale_factor(stiffness_scale_, stiffness_acceptance_);
+  return true;
 }
 
 }  // namespace ssrfleet::fleet
