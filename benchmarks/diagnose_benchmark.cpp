@@ -9,11 +9,14 @@
 //                      [--effects "sensor_gain:sensor=5,gain=1.05;tyre_damping:c_t=2000;none"]
 //                      [--trucks 20,50,100,200] [--seeds 2] [--particles 256] [--threads 2]
 //                      [--clean-logs 0] [--clean-trucks 100] [--runs FILE.jsonl] [--plot STEM] [--skip-timing]
-//                      [--json FILE] [--markdown FILE]
+//                      [--shard K/N] [--json FILE] [--markdown FILE]
 // The detection part is issue 17 item 4's power table (diagnose_power.hpp): --seeds logs per
 // (effect, fleet size), --clean-logs more clean logs of --clean-trucks for the pooled false-alarm
 // rate, every run appended to --runs as it ends (a restart skips those), --plot STEM the figure.
 // An effect's size is its setting's last parameter: write the one that grows last.
+// --shard K/N runs only the K-th of every N runs still to do (K from 0), so N processes of
+// --threads 1 share one --runs file: a diagnose's result does not depend on its thread count, one
+// thread a process wastes none of a core on waiting, and each run appends one whole line.
 #include <algorithm>
 #include <chrono>
 #include <fstream>
@@ -69,6 +72,7 @@ int main(int argc, char** argv) {
   int seeds = 2, particles = 256, timing_particles = 512, threads = 2, clean_logs = 0, clean_trucks = 100;
   std::string runs_path, plot_stem;
   bool skip_timing = false;
+  int shard = 0, shards = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const auto next = [&]() -> std::string {
@@ -90,13 +94,27 @@ int main(int argc, char** argv) {
     else if (a == "--seeds") seeds = std::stoi(next());
     else if (a == "--particles") particles = std::stoi(next());
     else if (a == "--threads") threads = std::stoi(next());
-    else if (a == "--json") json_path = next();
+    else if (a == "--shard") {
+      const std::string v = next();
+      const auto slash = v.find('/');
+      try {
+        if (slash == std::string::npos) throw std::invalid_argument(v);
+        shard = std::stoi(v.substr(0, slash));
+        shards = std::stoi(v.substr(slash + 1));
+      } catch (const std::exception&) {
+        shards = 0;
+      }
+      if (shards < 1 || shard < 0 || shard >= shards) {
+        std::cerr << "diagnose_benchmark: --shard '" << v << "': want K/N with 0 <= K < N, as 0/2\n";
+        return 64;
+      }
+    } else if (a == "--json") json_path = next();
     else if (a == "--markdown") md_path = next();
     else {
       std::cerr << "usage: diagnose_benchmark [--timing-effect SETTING] [--timing-two A+B] [--skip-prior] [--skip-detection] "
                    "[--timing-particles 512] [--effects \"A;B;none\"] "
                    "[--trucks 20,50,100,200] [--seeds 2] [--clean-logs 0] [--clean-trucks 100] [--runs FILE.jsonl] "
-                   "[--plot STEM] [--skip-timing] [--particles 256] [--threads 2] [--json FILE] [--markdown FILE]\n";
+                   "[--plot STEM] [--skip-timing] [--particles 256] [--threads 2] [--shard K/N] [--json FILE] [--markdown FILE]\n";
       return a == "--help" || a == "-h" ? 0 : 64;
     }
   }
@@ -195,6 +213,12 @@ int main(int argc, char** argv) {
     for (const auto& setting : effects)
       for (int s = 1; s <= seeds; ++s) todo.push_back({setting, n, static_cast<std::uint64_t>(100 + s)});
   std::erase_if(todo, [&](const Todo& t) { return done.count({t.setting, t.trucks, t.seed}) > 0; });
+  if (shards > 1) {
+    std::vector<Todo> mine;
+    for (auto k = static_cast<std::size_t>(shard); k < todo.size(); k += static_cast<std::size_t>(shards)) mine.push_back(todo[k]);
+    std::cerr << "detection: shard " << shard << "/" << shards << " takes " << mine.size() << " of " << todo.size() << " runs\n";
+    todo = std::move(mine);
+  }
   if (!runs.empty()) std::cerr << "detection: " << runs.size() << " runs read from " << runs_path << ", " << todo.size() << " to do\n";
   double spent_s = 0.0;
   for (std::size_t k = 0; k < todo.size(); ++k) {

@@ -411,9 +411,12 @@ double coverage95(const PosteriorDraws& draws) {
 }
 
 GapMeasures gap_measures(const PosteriorDraws& draws, const ObservedStatistics& observed) {
-  const double sigma_mean =
-      Eigen::Map<const Eigen::VectorXd>(draws.sigma_if.data(), static_cast<Index>(draws.sigma_if.size()))
-          .mean();
+  // A plain loop, not a mapped Eigen mean: Eigen vectorises a sum over a mapped pointer from its
+  // first aligned element, so the last bits would follow the vector's heap address, which differs
+  // with the thread count (found by the thread-count test of diagnose).
+  double sigma_sum = 0.0;
+  for (const double s : draws.sigma_if) sigma_sum += s;
+  const double sigma_mean = sigma_sum / static_cast<double>(draws.sigma_if.size());
   const Eigen::VectorXd standardised =
       observed.residual_mean * (std::sqrt(static_cast<double>(draws.observed.cols())) / sigma_mean);
   GapMeasures out;

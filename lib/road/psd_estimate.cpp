@@ -119,9 +119,12 @@ PsdFit fit_power_law(const Psd& psd, double n_lo_cpm, double n_hi_cpm, double n0
     ws.push_back(count(b));
   }
   if (xs.size() < 3) throw std::invalid_argument("fit_power_law: fewer than 3 frequency bins in the band");
-  const Eigen::Map<const Eigen::ArrayXd> x(xs.data(), static_cast<Eigen::Index>(xs.size()));
-  const Eigen::Map<const Eigen::ArrayXd> y(ys.data(), static_cast<Eigen::Index>(ys.size()));
-  const Eigen::Map<const Eigen::ArrayXd> wt(ws.data(), static_cast<Eigen::Index>(ws.size()));
+  // Copied into Eigen's own storage, not mapped: Eigen vectorises a sum over a mapped pointer from
+  // its first aligned element, so a sum over a std::vector's heap address would change in its last
+  // bits with where the allocator put it.
+  const Eigen::ArrayXd x = Eigen::Map<const Eigen::ArrayXd>(xs.data(), static_cast<Eigen::Index>(xs.size()));
+  const Eigen::ArrayXd y = Eigen::Map<const Eigen::ArrayXd>(ys.data(), static_cast<Eigen::Index>(ys.size()));
+  const Eigen::ArrayXd wt = Eigen::Map<const Eigen::ArrayXd>(ws.data(), static_cast<Eigen::Index>(ws.size()));
   const double xm = (wt * x).sum() / wt.sum();
   const double ym = (wt * y).sum() / wt.sum();
   const double slope = (wt * (x - xm) * (y - ym)).sum() / (wt * (x - xm).square()).sum();
