@@ -8,6 +8,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -223,6 +224,20 @@ inline std::string write_plot(const std::string& stem_path, const std::vector<Ru
        << "set yrange [-0.05:1.05]\nset ylabel 'detection probability'\nset key bottom right\nset grid\n"
        << "set offsets graph 0.08, graph 0.08, 0, 0\n";
   for (const auto& [effect, points] : by_effect) {
+    // Tics at the sizes run, written out whole: gnuplot's automatic ones for K2 (700000 and
+    // 1000000 N/m) ran into each other.
+    std::set<double> run_sizes;
+    for (const auto& p : points) run_sizes.insert(p.size);
+    body << "set xtics (";
+    bool first_tic = true;
+    for (const double v : run_sizes) {
+      std::ostringstream label;
+      if (v == std::round(v) && std::abs(v) < 1e12) label << std::fixed << std::setprecision(0);
+      label << v;
+      body << (first_tic ? "" : ", ") << "'" << label.str() << "' " << std::setprecision(17) << v;
+      first_tic = false;
+    }
+    body << ")\n";
     body << "set title '" << effect << "' noenhanced\nset xlabel '" << points.front().parameter << "' noenhanced\nplot ";
     bool first = true;
     for (int n : sizes) {
