@@ -182,10 +182,11 @@ inline std::string tables(const std::vector<Run>& runs, const std::vector<std::s
   return md.str();
 }
 
-// STEM.csv (effect, size parameter and value, trucks, right, runs, rate and its interval), STEM.gp
+// STEM.csv (effect, size parameter and value, trucks, right, runs, rate and its interval),
+// STEM-false-alarms.csv (per fleet size of clean logs: alarms, logs, rate and its interval), STEM.gp
 // and, where gnuplot is installed, STEM.png and STEM.svg: one panel per effect, detection rate
-// against the size parameter, one line per fleet size, the intervals as error bars. Returns "" or
-// what went wrong.
+// against the size parameter, one line per fleet size, the intervals as error bars; then one panel
+// of the clean logs' false-alarm rate against the 5 % target. Returns "" or what went wrong.
 inline std::string write_plot(const std::string& stem_path, const std::vector<Run>& runs, const std::vector<int>& sizes) {
   struct Point {
     std::string parameter;
@@ -197,6 +198,14 @@ inline std::string write_plot(const std::string& stem_path, const std::vector<Ru
     const auto [parameter, size] = size_of(k.first);
     if (parameter.empty()) continue;
     by_effect[effect_of(k.first)].push_back({parameter, size, k.second, c.right, c.runs});
+  }
+  // Clean logs per fleet size, for the false-alarm panel.
+  std::map<int, std::pair<int, int>> alarms_by_size;  // trucks -> (alarms, logs)
+  for (const auto& r : runs) {
+    if (r.setting != "none") continue;
+    auto& [alarms, logs] = alarms_by_size[r.trucks];
+    alarms += !right(r);
+    ++logs;
   }
   if (by_effect.empty()) return "no effect with a size to plot";
   const std::filesystem::path stem(stem_path);
@@ -216,7 +225,17 @@ inline std::string write_plot(const std::string& stem_path, const std::vector<Ru
       }
     }
   }
-  const auto panels = static_cast<int>(by_effect.size());
+  const std::string alarms_csv = name + "-false-alarms.csv";
+  if (!alarms_by_size.empty()) {
+    std::ofstream f = open_results_file((std::filesystem::path(dir) / alarms_csv).string());
+    f << "trucks,alarms,logs,rate,lower95,upper95\n";
+    for (const auto& [trucks, count] : alarms_by_size) {
+      const auto ci = util::clopper_pearson(count.first, count.second);
+      f << trucks << "," << count.first << "," << count.second << ","
+        << static_cast<double>(count.first) / count.second << "," << ci.lower << "," << ci.upper << "\n";
+    }
+  }
+  const auto panels = static_cast<int>(by_effect.size() + (alarms_by_size.empty() ? 0 : 1));
   const int columns = std::min(panels, 3), rows = (panels + columns - 1) / columns;
   std::ostringstream body;
   body << "set datafile separator ','\nset multiplot layout " << rows << "," << columns
@@ -246,6 +265,20 @@ inline std::string write_plot(const std::string& stem_path, const std::vector<Ru
       first = false;
     }
     body << "\n";
+  }
+  if (!alarms_by_size.empty()) {
+    // The clean logs' panel: the rate of anything named against the 5 % target, on an axis that
+    // shows a few per cent (a 0-1 axis would flatten it onto the floor).
+    body << "set title 'clean logs: false alarms' noenhanced\nset xlabel 'trucks'\nset ylabel 'false-alarm rate'\n"
+         << "set yrange [0:0.25]\nset key top right\nset xtics (";
+    bool first_tic = true;
+    for (const auto& [trucks, count] : alarms_by_size) {
+      body << (first_tic ? "" : ", ") << "'" << trucks << "' " << trucks;
+      first_tic = false;
+    }
+    body << ")\nset arrow from graph 0, first 0.05 to graph 1, first 0.05 nohead dashtype 2\n"
+         << "plot '" << alarms_csv << "' skip 1 using 1:4:5:6 with yerrorbars pt 7 title 'pooled per size, 95 % bars', "
+         << "NaN with lines dashtype 2 lc 'black' title 'target 5 %'\nunset arrow\n";
   }
   body << "unset multiplot\n";
   std::ofstream(std::filesystem::path(dir) / (name + ".gp"))

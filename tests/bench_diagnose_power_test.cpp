@@ -107,7 +107,8 @@ TEST_CASE("the plot's script puts a tic at each size run, written out whole", "[
   for (const auto* setting : {"second_class:share=0.3,sigma_k2=100000,K2=700000",
                               "second_class:share=0.3,sigma_k2=100000,K2=1000000", "sensor_gain:sensor=5,gain=1.02"})
     runs.push_back(run(setting, 50, 101, "second_class"));
-  bench::power::write_plot(dir.file("power"), runs, {50});
+  for (auto& r : clean_logs(100, 2)) runs.push_back(r);
+  bench::power::write_plot(dir.file("power"), runs, {50, 100});
   const std::string gp = test::read_text(dir.file("power.gp"));
   // gnuplot's own tics for K2 were 650000, 700000, ... and ran into each other.
   CHECK_THAT(gp, Catch::Contains("set xtics ('700000' 700000, '1000000' 1000000)"));
@@ -115,4 +116,9 @@ TEST_CASE("the plot's script puts a tic at each size run, written out whole", "[
   const std::string csv = test::read_text(dir.file("power.csv"));
   CHECK_THAT(csv, Catch::Contains("second_class,K2,700000,50,1,1,1,"));
   CHECK_THAT(csv, Catch::Contains("sensor_gain,gain,1.02,50,0,1,0,"));
+  // The clean logs are no effect's points; they get their own panel, against the 5 % target.
+  CHECK_THAT(csv, !Catch::Contains("none"));
+  const std::string alarms = test::read_text(dir.file("power-false-alarms.csv"));
+  CHECK_THAT(alarms, Catch::StartsWith("trucks,alarms,logs,rate,lower95,upper95\n100,2,100,0.02,"));
+  CHECK_THAT(gp, Catch::Contains("clean logs: false alarms") && Catch::Contains("first 0.05"));
 }
