@@ -14,9 +14,10 @@
 // (effect, fleet size), --clean-logs more clean logs of --clean-trucks for the pooled false-alarm
 // rate, every run appended to --runs as it ends (a restart skips those), --plot STEM the figure.
 // An effect's size is its setting's last parameter: write the one that grows last.
-// --shard K/N runs only the K-th of every N runs still to do (K from 0), so N processes of
-// --threads 1 share one --runs file: a diagnose's result does not depend on its thread count, one
-// thread a process wastes none of a core on waiting, and each run appends one whole line.
+// --shard K/N takes only the runs whose place in the whole campaign's list is K modulo N (K from
+// 0), so N processes (cores or machines) can share one --runs file: a diagnose's result does not
+// depend on its thread count, each run appends one whole line, and the parts stay apart however the
+// processes are started, stopped and restarted, since a place in the whole list never moves.
 #include <algorithm>
 #include <chrono>
 #include <fstream>
@@ -197,56 +198,42 @@ int main(int argc, char** argv) {
   const std::string commit = bench::run_command("git rev-parse --short HEAD 2>/dev/null");
   std::set<bench::power::Key> done;
   for (const auto& r : runs) done.insert(bench::power::key_of(r));
-  struct Todo {
-    std::string setting;
-    int trucks;
-    std::uint64_t seed;
-  };
-  // The order makes a campaign stopped part-way worth most: the clean logs first (the false-alarm
-  // rate is a yes-or-no target), then every effect at the smallest size before the next size (a
-  // 400-truck diagnose costs about six 100-truck ones).
-  std::vector<Todo> todo;
-  for (int s = 1; s <= clean_logs; ++s) todo.push_back({"none", clean_trucks, static_cast<std::uint64_t>(2000 + s)});
-  std::vector<int> ascending = sizes;
-  std::sort(ascending.begin(), ascending.end());
-  for (int n : ascending)
-    for (const auto& setting : effects)
-      for (int s = 1; s <= seeds; ++s) todo.push_back({setting, n, static_cast<std::uint64_t>(100 + s)});
-  std::erase_if(todo, [&](const Todo& t) { return done.count({t.setting, t.trucks, t.seed}) > 0; });
+  std::vector<bench::power::Key> todo = bench::power::campaign(clean_logs, clean_trucks, sizes, effects, seeds);
   if (shards > 1) {
-    std::vector<Todo> mine;
-    for (auto k = static_cast<std::size_t>(shard); k < todo.size(); k += static_cast<std::size_t>(shards)) mine.push_back(todo[k]);
-    std::cerr << "detection: shard " << shard << "/" << shards << " takes " << mine.size() << " of " << todo.size() << " runs\n";
-    todo = std::move(mine);
+    const std::size_t whole = todo.size();
+    todo = bench::power::shard_of(todo, shard, shards);
+    std::cerr << "detection: shard " << shard << "/" << shards << " is " << todo.size() << " of the campaign's " << whole
+              << " runs\n";
   }
+  std::erase_if(todo, [&](const bench::power::Key& k) { return done.count(k) > 0; });
   if (!runs.empty()) std::cerr << "detection: " << runs.size() << " runs read from " << runs_path << ", " << todo.size() << " to do\n";
   double spent_s = 0.0;
   for (std::size_t k = 0; k < todo.size(); ++k) {
-    const Todo& t = todo[k];
+    const auto& [setting, trucks, seed] = todo[k];
     discrepancy::DiagnoseOptions o;
     o.particles = particles;
     o.threads = threads;
-    o.seed = t.seed;
+    o.seed = seed;
     // A diagnose that throws is a result of the campaign too, and a wrong one: it is recorded as
     // named "error" (its message in the verdict) and the campaign goes on. Delete its line from
     // the runs file to run it again once the cause is fixed.
     bench::power::Run run;
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      const auto r = discrepancy::diagnose(site, make_log(site, t.setting, t.trucks, t.seed), o);
-      run = {t.setting, t.trucks, t.seed, r.effect, r.verdict, r.wall_s, particles, commit};
+      const auto r = discrepancy::diagnose(site, make_log(site, setting, trucks, seed), o);
+      run = {setting, trucks, seed, r.effect, r.verdict, r.wall_s, particles, commit};
     } catch (const std::exception& e) {
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      run = {t.setting, t.trucks, t.seed, "error", std::string("error: ") + e.what(), wall, particles, commit};
-      std::cerr << "detection: " << t.setting << ", " << t.trucks << " trucks, seed " << t.seed << " threw: " << e.what()
+      run = {setting, trucks, seed, "error", std::string("error: ") + e.what(), wall, particles, commit};
+      std::cerr << "detection: " << setting << ", " << trucks << " trucks, seed " << seed << " threw: " << e.what()
                 << "\n";
     }
     runs.push_back(run);
     if (!runs_path.empty()) bench::power::append_run(runs_path, run);
     spent_s += run.wall_s;
     const double left_s = spent_s / static_cast<double>(k + 1) * static_cast<double>(todo.size() - k - 1);
-    std::cerr << "detection " << (k + 1) << "/" << todo.size() << ": " << t.setting << ", " << t.trucks << " trucks, seed "
-              << t.seed << ": named " << run.named << " (" << std::fixed << std::setprecision(1) << run.wall_s
+    std::cerr << "detection " << (k + 1) << "/" << todo.size() << ": " << setting << ", " << trucks << " trucks, seed "
+              << seed << ": named " << run.named << " (" << std::fixed << std::setprecision(1) << run.wall_s
               << " s; about " << std::setprecision(0) << left_s / 60.0 << " min left)\n" << std::defaultfloat;
   }
   for (const auto& r : runs) {

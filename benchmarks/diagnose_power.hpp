@@ -58,23 +58,59 @@ inline bool right(const Run& r) { return r.named == (r.setting == "none" ? std::
 using Key = std::tuple<std::string, int, std::uint64_t>;
 inline Key key_of(const Run& r) { return {r.setting, r.trucks, r.seed}; }
 
+// Every run of a campaign, in the order it is run: the order makes a campaign stopped part-way
+// worth most: the clean logs first (seeds 2001…; the false-alarm rate is a yes-or-no target), then
+// every setting at the smallest fleet size before the next size (seeds 101…; a 400-truck diagnose
+// costs about six 100-truck ones).
+inline std::vector<Key> campaign(int clean_logs, int clean_trucks, std::vector<int> sizes,
+                                 const std::vector<std::string>& settings, int seeds) {
+  std::vector<Key> runs;
+  for (int s = 1; s <= clean_logs; ++s) runs.emplace_back("none", clean_trucks, static_cast<std::uint64_t>(2000 + s));
+  std::sort(sizes.begin(), sizes.end());
+  for (int n : sizes)
+    for (const auto& setting : settings)
+      for (int s = 1; s <= seeds; ++s) runs.emplace_back(setting, n, static_cast<std::uint64_t>(100 + s));
+  return runs;
+}
+
+// Part `shard` of `shards` (0 <= shard < shards) of a campaign: the runs whose place in the whole
+// list is `shard` modulo `shards`. Taken before the done runs are dropped, so a run's part never
+// moves however the processes are started, stopped and restarted, and the parts never overlap.
+inline std::vector<Key> shard_of(const std::vector<Key>& whole, int shard, int shards) {
+  std::vector<Key> part;
+  for (auto k = static_cast<std::size_t>(shard); k < whole.size(); k += static_cast<std::size_t>(shards))
+    part.push_back(whole[k]);
+  return part;
+}
+
 // Reads the runs file; a line that does not parse (a run killed mid-write) is skipped with a
-// warning, so the run it held is simply done again.
+// warning, so the run it held is simply done again. A run repeated (the same setting, trucks, seed
+// and particle count, as two processes given the same part would write) counts once, the first.
 inline std::vector<Run> read_runs(const std::string& path) {
   std::vector<Run> runs;
+  std::map<std::tuple<std::string, int, std::uint64_t, int>, int> first_line;
   std::ifstream in(path);
   std::string line;
   int number = 0;
   while (std::getline(in, line)) {
     ++number;
     if (line.empty()) continue;
+    Run r;
     try {
       const auto j = nlohmann::json::parse(line);
-      runs.push_back({j.at("setting"), j.at("trucks"), j.at("seed"), j.at("named"), j.at("verdict"), j.at("wall_s"),
-                      j.at("particles"), j.at("commit")});
+      r = {j.at("setting"), j.at("trucks"), j.at("seed"), j.at("named"), j.at("verdict"), j.at("wall_s"),
+           j.at("particles"), j.at("commit")};
     } catch (const std::exception& e) {
       std::cerr << "warning: " << path << " line " << number << " skipped (" << e.what() << ")\n";
+      continue;
     }
+    const auto [at, is_new] = first_line.try_emplace({r.setting, r.trucks, r.seed, r.particles}, number);
+    if (!is_new) {
+      std::cerr << "warning: " << path << " line " << number << " repeats the run of line " << at->second
+                << "; counted once\n";
+      continue;
+    }
+    runs.push_back(std::move(r));
   }
   return runs;
 }

@@ -4,6 +4,8 @@
 // they are checked here on runs made up for the purpose, not on a campaign's output.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -57,7 +59,7 @@ TEST_CASE("an effect's size is its setting's last parameter", "[bench][power]") 
   CHECK(bench::power::effect_of("speed_bias:factor=1.02") == "speed_bias");
 }
 
-TEST_CASE("the runs file gives back every run, and skips a line a kill cut short", "[bench][power]") {
+TEST_CASE("the runs file gives back every run once, and skips a line a kill cut short", "[bench][power]") {
   test::TempDir dir;
   const std::string path = dir.file("runs.jsonl");
   const Run a = run("tyre_damping:c_t=2000", 400, 107, "tyre_damping");
@@ -69,6 +71,10 @@ TEST_CASE("the runs file gives back every run, and skips a line a kill cut short
     torn << "{\"setting\":\"speed_bias:factor=1.05\",\"trucks\":4\n";
   }
   bench::power::append_run(path, b);
+  // The same run written twice (two processes given the same part) counts once, the first.
+  Run again = a;
+  again.named = "none";
+  bench::power::append_run(path, again);
   const auto runs = bench::power::read_runs(path);
   REQUIRE(runs.size() == 2);
   CHECK(bench::power::key_of(runs[0]) == bench::power::key_of(a));
@@ -121,4 +127,34 @@ TEST_CASE("the plot's script puts a tic at each size run, written out whole", "[
   const std::string alarms = test::read_text(dir.file("power-false-alarms.csv"));
   CHECK_THAT(alarms, Catch::StartsWith("trucks,alarms,logs,rate,lower95,upper95\n100,2,100,0.02,"));
   CHECK_THAT(gp, Catch::Contains("clean logs: false alarms") && Catch::Contains("first 0.05"));
+}
+
+TEST_CASE("a campaign runs the clean logs, then each fleet size in turn", "[bench][power]") {
+  const auto runs = bench::power::campaign(2, 100, {400, 50}, {"a:x=1", "b:y=2"}, 3);
+  REQUIRE(runs.size() == 2 + 2 * 2 * 3);
+  CHECK(runs[0] == bench::power::Key{"none", 100, 2001});
+  CHECK(runs[1] == bench::power::Key{"none", 100, 2002});
+  CHECK(runs[2] == bench::power::Key{"a:x=1", 50, 101});
+  CHECK(runs[5] == bench::power::Key{"b:y=2", 50, 101});
+  // The smaller fleet first, whatever order the sizes were given in.
+  CHECK(runs[8] == bench::power::Key{"a:x=1", 400, 101});
+  CHECK(runs.back() == bench::power::Key{"b:y=2", 400, 103});
+}
+
+TEST_CASE("the shards of a campaign cover it once, and a run's shard does not move as runs get done", "[bench][power]") {
+  const auto whole = bench::power::campaign(5, 100, {50, 100, 400}, {"a:x=1", "b:y=2", "c:z=3"}, 4);
+  for (int shards : {1, 2, 3, 7}) {
+    INFO(shards << " shards");
+    std::map<bench::power::Key, int> taken;
+    for (int k = 0; k < shards; ++k)
+      for (const auto& key : bench::power::shard_of(whole, k, shards)) ++taken[key];
+    CHECK(taken.size() == whole.size());
+    CHECK(std::all_of(taken.begin(), taken.end(), [](const auto& kv) { return kv.second == 1; }));
+  }
+  // Shards split the whole list, not what is left of it: a process started after the other has
+  // done some runs still takes the same part, so the two never run one log twice.
+  const auto part = bench::power::shard_of(whole, 1, 2);
+  CHECK(part[0] == whole[1]);
+  CHECK(part[1] == whole[3]);
+  CHECK(part.size() == whole.size() / 2);
 }
