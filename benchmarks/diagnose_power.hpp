@@ -88,7 +88,7 @@ inline std::vector<Key> shard_of(const std::vector<Key>& whole, int shard, int s
 // and particle count, as two processes given the same part would write) counts once, the first.
 inline std::vector<Run> read_runs(const std::string& path) {
   std::vector<Run> runs;
-  std::map<std::tuple<std::string, int, std::uint64_t, int>, int> first_line;
+  std::map<std::pair<Key, int>, int> first_line;  // (run, particles) -> the line it was first on
   std::ifstream in(path);
   std::string line;
   int number = 0;
@@ -104,7 +104,7 @@ inline std::vector<Run> read_runs(const std::string& path) {
       std::cerr << "warning: " << path << " line " << number << " skipped (" << e.what() << ")\n";
       continue;
     }
-    const auto [at, is_new] = first_line.try_emplace({r.setting, r.trucks, r.seed, r.particles}, number);
+    const auto [at, is_new] = first_line.try_emplace({key_of(r), r.particles}, number);
     if (!is_new) {
       std::cerr << "warning: " << path << " line " << number << " repeats the run of line " << at->second
                 << "; counted once\n";
@@ -218,6 +218,23 @@ inline std::string tables(const std::vector<Run>& runs, const std::vector<std::s
   return md.str();
 }
 
+// gnuplot's "set xtics (...)" with a tic at each value, whole numbers written out whole: gnuplot's
+// automatic tics for K2 (700000 and 1000000 N/m) ran into each other.
+inline std::string xtics_at(const std::set<double>& values) {
+  std::ostringstream tics;
+  tics << "set xtics (";
+  bool first = true;
+  for (const double v : values) {
+    std::ostringstream label;
+    if (v == std::round(v) && std::abs(v) < 1e12) label << std::fixed << std::setprecision(0);
+    label << v;
+    tics << (first ? "" : ", ") << "'" << label.str() << "' " << std::setprecision(17) << v;
+    first = false;
+  }
+  tics << ")\n";
+  return tics.str();
+}
+
 // STEM.csv (effect, size parameter and value, trucks, right, runs, rate and its interval),
 // STEM-false-alarms.csv (per fleet size of clean logs: alarms, logs, rate and its interval), STEM.gp
 // and, where gnuplot is installed, STEM.png and STEM.svg: one panel per effect, detection rate
@@ -279,20 +296,9 @@ inline std::string write_plot(const std::string& stem_path, const std::vector<Ru
        << "set yrange [-0.05:1.05]\nset ylabel 'detection probability'\nset key bottom right\nset grid\n"
        << "set offsets graph 0.08, graph 0.08, 0, 0\n";
   for (const auto& [effect, points] : by_effect) {
-    // Tics at the sizes run, written out whole: gnuplot's automatic ones for K2 (700000 and
-    // 1000000 N/m) ran into each other.
     std::set<double> run_sizes;
     for (const auto& p : points) run_sizes.insert(p.size);
-    body << "set xtics (";
-    bool first_tic = true;
-    for (const double v : run_sizes) {
-      std::ostringstream label;
-      if (v == std::round(v) && std::abs(v) < 1e12) label << std::fixed << std::setprecision(0);
-      label << v;
-      body << (first_tic ? "" : ", ") << "'" << label.str() << "' " << std::setprecision(17) << v;
-      first_tic = false;
-    }
-    body << ")\n";
+    body << xtics_at(run_sizes);
     body << "set title '" << effect << "' noenhanced\nset xlabel '" << points.front().parameter << "' noenhanced\nplot ";
     bool first = true;
     for (int n : sizes) {
@@ -306,13 +312,10 @@ inline std::string write_plot(const std::string& stem_path, const std::vector<Ru
     // The clean logs' panel: the rate of anything named against the 5 % target, on an axis that
     // shows a few per cent (a 0-1 axis would flatten it onto the floor).
     body << "set title 'clean logs: false alarms' noenhanced\nset xlabel 'trucks'\nset ylabel 'false-alarm rate'\n"
-         << "set yrange [0:0.25]\nset key top right\nset xtics (";
-    bool first_tic = true;
-    for (const auto& [trucks, count] : alarms_by_size) {
-      body << (first_tic ? "" : ", ") << "'" << trucks << "' " << trucks;
-      first_tic = false;
-    }
-    body << ")\nset arrow from graph 0, first 0.05 to graph 1, first 0.05 nohead dashtype 2\n"
+         << "set yrange [0:0.25]\nset key top right\n";
+    std::set<double> fleet_sizes;
+    for (const auto& [trucks, count] : alarms_by_size) fleet_sizes.insert(trucks);
+    body << xtics_at(fleet_sizes) << "set arrow from graph 0, first 0.05 to graph 1, first 0.05 nohead dashtype 2\n"
          << "plot '" << alarms_csv << "' skip 1 using 1:4:5:6 with yerrorbars pt 7 title 'pooled per size, 95 % bars', "
          << "NaN with lines dashtype 2 lc 'black' title 'target 5 %'\nunset arrow\n";
   }
