@@ -34,7 +34,7 @@ set xlabel 'trucks'
 set ylabel 'false-alarm rate'
 set yrange [0:0.25]
 set key top right
-set xtics ('100' 100)
+set xtics ('100' 100, '400' 400)
 set arrow from graph 0, first 0.05 to graph 1, first 0.05 nohead dashtype 2
 plot 'diagnose-power-false-alarms.csv' skip 1 using 1:4:5:6 with yerrorbars pt 7 title 'pooled per size, 95 % bars', NaN with lines dashtype 2 lc 'black' title 'target 5 %'
 unset arrow
@@ -70,7 +70,7 @@ set xlabel 'trucks'
 set ylabel 'false-alarm rate'
 set yrange [0:0.25]
 set key top right
-set xtics ('100' 100)
+set xtics ('100' 100, '400' 400)
 set arrow from graph 0, first 0.05 to graph 1, first 0.05 nohead dashtype 2
 plot 'diagnose-power-false-alarms.csv' skip 1 using 1:4:5:6 with yerrorbars pt 7 title 'pooled per size, 95 % bars', NaN with lines dashtype 2 lc 'black' title 'target 5 %'
 unset arrow
