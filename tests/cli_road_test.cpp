@@ -191,6 +191,11 @@ TEST_CASE("road summarises an OpenCRG road whose wheel path crosses holes; drivi
   const auto fit = run_ssrfleet("fit '" + log + "' --road '" + crg + "' --particles 64 --quiet", dir);
   CHECK(fit.status == 65);
   CHECK_THAT(fit.err, Catch::Contains(crg) && Catch::Contains("missing cells"));
+  const std::string posterior = dir.file("posterior.json");
+  REQUIRE(run_ssrfleet("fit '" + log + "' --road AS1 --particles 64 --quiet --out '" + posterior + "'", dir).status == 0);
+  const auto predict = run_ssrfleet("predict --posterior '" + posterior + "' --road '" + crg + "' --quiet", dir);
+  CHECK(predict.status == 65);
+  CHECK_THAT(predict.err, Catch::Contains(crg) && Catch::Contains("245 missing cells, the first at x = 40 m, y = 1.5 m"));
 }
 
 TEST_CASE("road refuses to convert holes into a format without a missing value, and keeps them in OpenCRG",

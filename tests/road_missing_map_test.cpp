@@ -86,7 +86,8 @@ TEST_CASE("missing cells are mapped by groups of lines with the same pattern, an
   CHECK(describe_span(find_missing(s, 0, 21, 2, 3), s) == "no missing cells");
 }
 
-TEST_CASE("the measured part is the unbroken lines, else the longest stretch clear of holes", "[road][missing]") {
+TEST_CASE("the measured part is the unbroken lines, else the longest stretch clear of holes",
+          "[road][missing]") {
   Surface s = small_surface();
   s.height_m(7, 1) = kHole;
   MeasuredPart part = measured_part(s);
@@ -154,7 +155,8 @@ TEST_CASE("a road cut across its width is still summarised: roughness of the lon
     CHECK(w.unavailable == "crosses 10 missing cells between x = 60 and 60.45 m");
   }
   const std::string text = to_text(cut);
-  CHECK_THAT(text, Catch::Contains("on 101 of 101 lines over x = 0 .. 59.95 m (the longest stretch clear of holes)") &&
+  CHECK_THAT(text, Catch::Contains(
+                       "on 101 of 101 lines over x = 0 .. 59.95 m (the longest stretch clear of holes)") &&
                        Catch::Contains("clear of holes: no line (every line has a missing cell)") &&
                        Catch::Contains("IRI         unavailable at all 11 lateral positions"));
 

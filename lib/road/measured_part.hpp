@@ -15,10 +15,10 @@
 namespace ssrfleet::road {
 
 struct MeasuredPart {
-  Eigen::Index row_begin = 0;        // rows [row_begin, row_end)
+  Eigen::Index row_begin = 0;  // rows [row_begin, row_end)
   Eigen::Index row_end = 0;
-  std::vector<Eigen::Index> lines;   // increasing
-  bool whole_lines = false;          // the lines are unbroken over the whole length
+  std::vector<Eigen::Index> lines;  // increasing
+  bool whole_lines = false;         // the lines are unbroken over the whole length
 };
 
 MeasuredPart measured_part(const Surface& surface);

@@ -42,16 +42,20 @@ MissingMap map_missing(const Surface& surface, std::size_t max_groups) {
   MissingLineGroup open;  // the group being extended; cells_per_line 0 when none
   const auto close = [&] {
     if (open.cells_per_line == 0) return;
-    if (map.groups.size() < max_groups) map.groups.push_back(open);
-    else ++map.groups_left_out;
+    if (map.groups.size() < max_groups)
+      map.groups.push_back(open);
+    else
+      ++map.groups_left_out;
     open = MissingLineGroup{};
   };
   for (Eigen::Index j = 0; j < surface.lines(); ++j) {
     const MissingLineGroup g = line_pattern(surface, j);
     if (g.cells_per_line == 0) {
       close();
-      if (!map.clear_lines.empty() && map.clear_lines.back().second == j - 1) map.clear_lines.back().second = j;
-      else map.clear_lines.emplace_back(j, j);
+      if (!map.clear_lines.empty() && map.clear_lines.back().second == j - 1)
+        map.clear_lines.back().second = j;
+      else
+        map.clear_lines.emplace_back(j, j);
       continue;
     }
     map.cells += g.cells_per_line;
@@ -80,16 +84,21 @@ std::string describe_map(const MissingMap& map, const GridPositions& grid, const
     ++listed;
     const Eigen::Index lines = g.line_end - g.line_begin;
     os << indent << "y = " << grid.y(g.line_begin);
-    if (lines > 1) os << " .. " << grid.y(g.line_end - 1) << " m (" << lines << " lines): ";
-    else os << " m: ";
+    if (lines > 1)
+      os << " .. " << grid.y(g.line_end - 1) << " m (" << lines << " lines): ";
+    else
+      os << " m: ";
     os << g.cells_per_line << " cell" << (g.cells_per_line == 1 ? "" : "s");
     if (g.holes_per_line > 1) os << " in " << g.holes_per_line << " holes";
     if (lines > 1) os << " each";
-    if (g.first_row == g.last_row) os << " at x = " << x(g.first_row) << " m\n";
-    else os << ", x = " << x(g.first_row) << " .. " << x(g.last_row) << " m\n";
+    if (g.first_row == g.last_row)
+      os << " at x = " << x(g.first_row) << " m\n";
+    else
+      os << ", x = " << x(g.first_row) << " .. " << x(g.last_row) << " m\n";
   }
   const std::size_t more = map.groups.size() - listed + map.groups_left_out;
-  if (more > 0) os << indent << "... and " << more << " more group" << (more == 1 ? "" : "s") << " of lines\n";
+  if (more > 0)
+    os << indent << "... and " << more << " more group" << (more == 1 ? "" : "s") << " of lines\n";
   os << indent << "clear of holes: ";
   if (map.clear_lines.empty()) os << "no line (every line has a missing cell)\n";
   const std::size_t ranges = std::min(map.clear_lines.size(), max_listed);
@@ -117,7 +126,8 @@ nlohmann::json to_json(const MissingMap& map, const GridPositions& grid) {
                       {"x_to_m", grid.x(g.last_row)}});
   }
   nlohmann::json clear = nlohmann::json::array();
-  for (const auto& [first, last] : map.clear_lines) clear.push_back({{"y_from_m", grid.y(first)}, {"y_to_m", grid.y(last)}});
+  for (const auto& [first, last] : map.clear_lines)
+    clear.push_back({{"y_from_m", grid.y(first)}, {"y_to_m", grid.y(last)}});
   nlohmann::json j = {{"cells", map.cells},
                       {"lines_with_missing", map.lines_with_missing},
                       {"groups", groups},

@@ -30,10 +30,10 @@ struct MissingLineGroup {
 struct MissingMap {
   Eigen::Index cells = 0;
   Eigen::Index lines_with_missing = 0;
-  Eigen::Index first_row = -1;                  // over all lines; -1 when nothing is missing
+  Eigen::Index first_row = -1;  // over all lines; -1 when nothing is missing
   Eigen::Index last_row = -1;
-  std::vector<MissingLineGroup> groups;         // by lateral position, at most max_groups
-  std::size_t groups_left_out = 0;              // groups past max_groups (counted, not listed)
+  std::vector<MissingLineGroup> groups;  // by lateral position, at most max_groups
+  std::size_t groups_left_out = 0;       // groups past max_groups (counted, not listed)
   std::vector<std::pair<Eigen::Index, Eigen::Index>> clear_lines;  // runs [first, last] of complete lines
 };
 
