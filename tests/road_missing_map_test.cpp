@@ -160,6 +160,15 @@ TEST_CASE("a road cut across its width is still summarised: roughness of the lon
                        Catch::Contains("clear of holes: no line (every line has a missing cell)") &&
                        Catch::Contains("IRI         unavailable at all 11 lateral positions"));
 
+  // Gaps every 0.5 m: the longest stretch, 0.4 m, puts the band's low end (4 / 0.4 m = 10
+  // cycle/m) above its high end (5 cycle/m), so there is no fit.
+  for (Eigen::Index i = 0; i < s.samples(); i += 10) s.height_m.row(i).setConstant(kHole);
+  const SurfaceSummary chopped = summarize(s);
+  CHECK(chopped.psd.bins == 0);
+  CHECK(chopped.psd_lines == 101);
+  CHECK_THAT(to_text(chopped), Catch::Contains("PSD fit     none (the longest stretch clear of holes, x = 0.05 .. "
+                                               "0.45 m, is too short)"));
+
   s.height_m.setConstant(kHole);
   const SurfaceSummary nothing = summarize(s);
   CHECK(nothing.psd.bins == 0);

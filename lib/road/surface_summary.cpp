@@ -205,8 +205,13 @@ std::string to_text(const SurfaceSummary& s) {
     }
     os << "  class       " << s.roughness_class.label << " in " << s.roughness_class.table << "\n";
   } else {
-    os << "  PSD fit     none (" << (s.psd_lines == 0 ? "nothing measured" : "surface too short or too coarse")
-       << ")\n";
+    os << "  PSD fit     none (";
+    if (s.psd_lines == 0) os << "nothing measured";
+    else if (!s.psd_whole_lines)
+      os << std::setprecision(6) << "the longest stretch clear of holes, x = " << s.psd_x_from_m << " .. "
+         << s.psd_x_to_m << " m, is too short" << std::setprecision(3);
+    else os << "surface too short or too coarse";
+    os << ")\n";
   }
   for (const WheelPathRoughness& w : s.wheel_paths) {
     os << "  wheel path  " << w.label << ": IRI ";
