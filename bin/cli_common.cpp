@@ -110,9 +110,10 @@ void write_output(const std::string& path, const std::function<void(std::ostream
 std::vector<records::WimRecord> read_site_log(const std::string& path, const site::Site& site, const SiteFlags& flags,
                                               const io::WimLimits& limits) {
   int sensors = 0;
-  auto records = io::read_wim_log_file(path, site.options().unsprung_mass_kg, &sensors, limits);
+  std::size_t header_line = 1;
+  auto records = io::read_wim_log_file(path, site.options().unsprung_mass_kg, &sensors, limits, &header_line);
   if (sensors != site.sensors()) {
-    throw DataError(path, 1, "if_" + std::to_string(sensors),
+    throw DataError(path, header_line, "if_" + std::to_string(sensors),
                     "the log has " + std::to_string(sensors) + " sensors but the site has " +
                         std::to_string(site.sensors()) + " (--sensors " + flags.sensors + ")");
   }

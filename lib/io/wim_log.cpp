@@ -183,7 +183,7 @@ WimLogReader::Status WimLogReader::next(records::WimRecord& record, Rejection& w
 }
 
 std::vector<records::WimRecord> read_wim_log_file(const std::string& path, double unsprung_mass_kg, int* sensors_out,
-                                                  const WimLimits& limits) {
+                                                  const WimLimits& limits, std::size_t* header_line_out) {
   std::ifstream in(path);
   if (!in) throw MissingInputError("cannot open WIM log '" + path + "'");
   WimLogReader reader(in, path, unsprung_mass_kg, limits);
@@ -197,8 +197,9 @@ std::vector<records::WimRecord> read_wim_log_file(const std::string& path, doubl
     records.push_back(std::move(r));
   }
   if (in.bad()) throw IoError("reading '" + path + "' failed");
-  if (records.empty()) throw DataError(path, reader.sensors() > 0 ? 2 : 1, "truck_id", "the log holds no truck records");
+  if (records.empty()) throw DataError(path, reader.header_line_number() + 1, "truck_id", "the log holds no truck records");
   if (sensors_out) *sensors_out = reader.sensors();
+  if (header_line_out) *header_line_out = reader.header_line_number();
   return records;
 }
 

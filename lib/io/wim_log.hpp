@@ -63,6 +63,9 @@ class WimLogReader {
   bool has_classes() const { return class_col_ >= 0; }  // the header has a `class` column
   const std::string& source_name() const { return csv_.source_name(); }
   const std::string& header_line() const { return header_raw_; }
+  // The header's line number in the file (comment lines above it count): where a complaint about
+  // the columns points.
+  std::size_t header_line_number() const { return header_line_; }
 
   // Next record: `record` on success, `rejected` (with `why` filled) for a bad one, `end` at EOF.
   Status next(records::WimRecord& record, Rejection& why);
@@ -113,8 +116,10 @@ class WimLogReader {
 };
 
 // Reads a whole log; the first bad record is an error (DataError naming file, line, field).
+// header_line_out: the header's line number, for the caller's own complaints about the columns.
 std::vector<records::WimRecord> read_wim_log_file(const std::string& path, double unsprung_mass_kg,
-                                                  int* sensors_out = nullptr, const WimLimits& limits = {});
+                                                  int* sensors_out = nullptr, const WimLimits& limits = {},
+                                                  std::size_t* header_line_out = nullptr);
 
 // Writes records as a WIM log with if_ columns, full precision (round trips bit-exactly); with a
 // `class` column when any record has a class.

@@ -309,20 +309,20 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
     for (const auto& s : sites_) log_sites.push_back({s.name, s.site->sensors()});
     reader.set_sites(std::move(log_sites));
   } else if (reader.sensors() != site_.sensors()) {
-    throw DataError(source, 1, "if_" + std::to_string(reader.sensors()),
+    throw DataError(source, reader.header_line_number(), "if_" + std::to_string(reader.sensors()),
                     "the input has " + std::to_string(reader.sensors()) + " sensors but the site has " +
                         std::to_string(site_.sensors()));
   }
   // Vehicle classes: a state holds labelled classes or one unlabelled posterior, never both.
   if (!cores_.empty() && cores_.labelled() != reader.has_classes()) {
-    throw DataError(source, 1, "class",
+    throw DataError(source, reader.header_line_number(), "class",
                     cores_.labelled() ? "the input has no class column, but the state holds classes " + cores_.labels()
                                       : std::string("the input has a class column, but the state's posterior has no "
                                                     "classes (replay into a new state directory)"));
   }
   if (!resumed_) cores_.set_fixed(options_.classes);
   if (!cores_.fixed().empty() && !reader.has_classes()) {
-    throw DataError(source, 1, "class", "the state's classes are fixed (--classes), but the input has no class column");
+    throw DataError(source, reader.header_line_number(), "class", "the state's classes are fixed (--classes), but the input has no class column");
   }
   reader.set_classes(cores_.fixed());
   reader.set_follow(options_.follow);
@@ -346,6 +346,7 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
   StreamCounts counts;
   records::WimRecord record;
   io::Rejection why;
+  long reported_at = -1;  // the truck count of the last --report-every report
   for (;;) {
     if (stop.load()) break;
     const auto status = reader.next(record, why);
@@ -390,9 +391,13 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
       *progress_ << (note.empty() ? "" : "; ") << note << "\n";
       progress_->unsetf(std::ios::floatfield);
     }
-    if (options_.report_every > 0 && cores_.trucks_seen() % options_.report_every == 0) report();
+    if (options_.report_every > 0 && cores_.trucks_seen() % options_.report_every == 0) {
+      report();
+      reported_at = cores_.trucks_seen();
+    }
   }
-  report();
+  // The end of input reports the posterior once, not again when the last truck's report was due.
+  if (cores_.trucks_seen() != reported_at) report();
   counts.total_absorbed = cores_.trucks_seen();
   return counts;
 }
