@@ -75,7 +75,8 @@ int run_road(int argc, const char* const argv[]) {
        "OpenCRG data type for --write: KDBI (binary double, exact), KRBI, LDFI or LRFI")
       ("erd", po::value(&erd_path)->value_name("FILE"), "write the wheel paths' longitudinal profiles to this ERD file")
       ("wheel-paths", po::value(&wheel_paths_text)->value_name("Z,Z,..."),
-       "lateral positions (m) of the wheel paths, comma-separated (default: the surface's centre -/+ 0.9 m)")
+       "lateral positions (m) of the wheel paths, comma-separated (default: the surface's centre -/+ 0.9 m, or its "
+       "centre alone on a surface narrower than 1.8 m)")
       ("classes", po::value(&classes)->value_name("TABLE")->default_value(classes),
        "roughness class table: iso8608 (ISO 8608:1995) or paper (the ISO draft of 1982 the paper's labels follow)")
       ("json", po::bool_switch(&json), "print the summary as JSON instead of text")

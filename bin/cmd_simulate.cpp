@@ -137,7 +137,7 @@ int run_simulate(int argc, const char* const argv[]) {
        "also write each truck's true static wheel load here (truck_id,static_kn,sprung_mass_kg)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   site_flags.add_to(desc);
-  po::options_description fleet_desc("Fleet distribution (the paper's Table 1 by default)");
+  po::options_description fleet_desc("Fleet distribution (paper Table 1)");
   const auto number = [](double& value, const char* name) {
     return po::value(&value)->value_name(name)->default_value(value, shortest_text(value));
   };

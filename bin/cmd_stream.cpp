@@ -58,7 +58,8 @@ int run_stream(int argc, const char* const argv[]) {
        "summaries and SSR prediction), rejects.csv (the quarantined records) and lock (held by the running stream)")
       ("input,i", po::value(&input)->value_name("FILE")->default_value(input), "WIM log to read ('-' = standard input)")
       ("follow,f", po::bool_switch(&options.follow),
-       "at the end of the input wait for more, like tail -f (stop with Ctrl-C or SIGTERM)")
+       "with --input FILE: at its end wait for more, like tail -f (stop with Ctrl-C or SIGTERM); standard input is "
+       "read until it closes")
       ("report-every", po::value(&options.report_every)->value_name("N")->default_value(options.report_every),
        "print the SSR prediction every N trucks (0 = only at the end)")
       ("particles", po::value(&particles)->value_name("N")->default_value(particles), "number of particles P (>= 2)")
