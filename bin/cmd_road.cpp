@@ -2,19 +2,26 @@
 // spacing, missing cells, RMS height, fitted G_d(n0) and waviness w with its roughness class, the
 // IRI of the wheel paths and across the width; and convert it: a surface to a road CSV or an
 // OpenCRG file (--write), the wheel paths' profiles to an ERD file (--erd).
+// A road with missing cells is described, never refused: the summary says where the holes are and
+// gives an IRI across one as unavailable. Only a conversion that would have to invent heights is
+// refused, before anything is written: a road CSV and an ERD file have no marker for a missing
+// height, so any number written in its place would be read back as road.
 #include <filesystem>
 #include <iostream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "road/crg_reader.hpp"
 #include "road/crg_writer.hpp"
 #include "road/erd_format.hpp"
 #include "road/road_format.hpp"
 #include "road/surface_csv.hpp"
 #include "road/surface_presets.hpp"
+#include "road/missing_cells.hpp"
 #include "road/surface_summary.hpp"
 #include "road/wheel_path.hpp"
 #include "site/road_source.hpp"
@@ -47,6 +54,54 @@ bool ends_with_crg(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext == ".crg";
+}
+
+// The surface as simulate would read it, with the reader's warnings on stderr; an OpenCRG file's
+// missing cells are left to the summary, which maps them (for `road` they are not refused).
+road::Surface load_for_inspection(const std::string& spec) {
+  if (road::is_preset_name(spec) || road::detect_road_format(spec) != road::RoadFileFormat::crg) {
+    return site::load_road(spec, &std::cerr);
+  }
+  road::CrgRoad crg = road::read_crg_file(spec);
+  for (const std::string& w : crg.report.warnings) std::cerr << "warning: road '" << spec << "': " << w << "\n";
+  return std::move(crg.surface);
+}
+
+std::string clear_lines_text(const road::SurfaceSummary& summary) {
+  if (summary.missing.clear_lines.empty()) return "no lateral line is clear of holes";
+  std::ostringstream os;
+  os << "positions clear of holes: y = ";
+  for (std::size_t k = 0; k < summary.missing.clear_lines.size() && k < 6; ++k) {
+    const auto [first, last] = summary.missing.clear_lines[k];
+    os << (k == 0 ? "" : ", ") << summary.y0_m + summary.dy_m * static_cast<double>(first);
+    if (last > first) os << " .. " << summary.y0_m + summary.dy_m * static_cast<double>(last);
+  }
+  os << " m";
+  return os.str();
+}
+
+// Refuses, before anything is written, an output that cannot hold the surface's holes.
+void check_outputs_hold_holes(const road::Surface& surface, const road::SurfaceSummary& summary,
+                              const std::string& write_path, const std::string& erd_path,
+                              const std::vector<double>& erd_paths_m) {
+  if (summary.missing_cells == 0) return;
+  if (!write_path.empty() && !ends_with_crg(write_path)) {
+    throw DataError(surface.name, 0, "--write " + write_path,
+                    "the road has " + road::describe_span(road::find_missing(surface), surface) +
+                        "; a road CSV has no marker for a missing height, so the surface is not written: write "
+                        "an OpenCRG file (.crg), which keeps them as missing");
+  }
+  if (erd_path.empty()) return;
+  for (const double z : erd_paths_m) {
+    const road::MissingCells missing = road::missing_on_path(surface, z);
+    if (missing.count == 0) continue;
+    std::ostringstream where;
+    where << "--erd wheel path z = " << z << " m";
+    throw DataError(surface.name, 0, where.str(),
+                    "crosses " + road::describe_span(missing, surface) +
+                        "; an ERD file has no marker for a missing height, so the profiles are not written to '" +
+                        erd_path + "': choose --wheel-paths on measured road (" + clear_lines_text(summary) + ")");
+  }
 }
 
 void print(const road::SurfaceSummary& summary, bool json) {
@@ -114,16 +169,15 @@ int run_road(int argc, const char* const argv[]) {
     print(road::summarize(profiles, options.table), json);
     return 0;
   }
-  const road::Surface surface = site::load_road(spec, &std::cerr);
+  const road::Surface surface = load_for_inspection(spec);
   const road::SurfaceSummary summary = road::summarize(surface, options);
+  const std::vector<double> zs = options.wheel_paths_m.empty() ? road::default_wheel_paths_m(surface) : options.wheel_paths_m;
+  check_outputs_hold_holes(surface, summary, write_path, erd_path, zs);
   if (!write_path.empty()) {
     if (ends_with_crg(write_path)) road::write_crg_file(surface, write_path, crg_format);
     else road::write_surface_csv_file(surface, write_path);
   }
-  if (!erd_path.empty()) {
-    const std::vector<double> zs = options.wheel_paths_m.empty() ? road::default_wheel_paths_m(surface) : options.wheel_paths_m;
-    road::write_erd_file(road::wheel_path_profiles(surface, zs), erd_path);
-  }
+  if (!erd_path.empty()) road::write_erd_file(road::wheel_path_profiles(surface, zs), erd_path);
   print(summary, json);
   return 0;
 }

@@ -3,6 +3,11 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <limits>
+
+#include "road/crg_reader.hpp"
+#include "road/crg_writer.hpp"
+#include "road/erd_format.hpp"
 #include "road/surface_csv.hpp"
 #include "road/surface_presets.hpp"
 #include "test_support.hpp"
@@ -120,9 +125,109 @@ TEST_CASE("missing road in the trucks' stretch is refused, elsewhere it is repor
   INFO(summary.err);
   REQUIRE(summary.status == 0);
   CHECK(nlohmann::json::parse(summary.out).at("missing_cells") == 1);
+  // Inspecting is not driving: a named wheel path over the hole has no IRI, and says why.
   const auto over_hole = run_ssrfleet("road '" + in_stretch + "' --wheel-paths 0.25", dir);
-  CHECK(over_hole.status == 65);
-  CHECK_THAT(over_hole.err, Catch::Contains("wheel path z = 0.25 m"));
+  INFO(over_hole.err);
+  CHECK(over_hole.status == 0);
+  CHECK_THAT(over_hole.out, Catch::Contains("z=0.25m: IRI unavailable: it crosses 1 missing cell at x = 50 m"));
+}
+
+namespace {
+
+// AS1 (100 m x 5 m at 0.05 m) with two holes: 5 lines around the default left wheel path
+// (y = 1.5 .. 1.7 m, z = 1.6 m lies on line 32) from x = 40 to 42 m, and the 2 right-edge lines
+// from x = 50 to 50.95 m; written as a binary OpenCRG file, holes as NaN.
+std::string write_holed_as1(const test::TempDir& dir) {
+  road::Surface s = road::preset_surface("AS1");
+  const double hole = std::numeric_limits<double>::quiet_NaN();
+  s.height_m.block(800, 30, 41, 5).setConstant(hole);
+  s.height_m.block(1000, 0, 20, 2).setConstant(hole);
+  const std::string path = dir.file("holed.crg");
+  road::write_crg_file(s, path);
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("road summarises an OpenCRG road whose wheel path crosses holes; driving over them is refused",
+          "[cli][crg]") {
+  test::TempDir dir;
+  const std::string crg = write_holed_as1(dir);
+  const auto text = run_ssrfleet("road '" + crg + "'", dir);
+  INFO(text.err);
+  REQUIRE(text.status == 0);
+  CHECK_THAT(text.out, Catch::Contains("missing     245 cells in 7 of 101 lines:"));
+  CHECK_THAT(text.out, Catch::Contains("y = 0 .. 0.05 m (2 lines): 20 cells each, x = 50 .. 50.95 m"));
+  CHECK_THAT(text.out, Catch::Contains("y = 1.5 .. 1.7 m (5 lines): 41 cells each, x = 40 .. 42 m"));
+  CHECK_THAT(text.out, Catch::Contains("clear of holes: y = 0.1 .. 1.45, 1.75 .. 5 m"));
+  CHECK_THAT(text.out, Catch::Contains("on 94 of 101 lines (those with no missing cell)"));
+  CHECK_THAT(text.out, Catch::Contains("class       A in ISO 8608:1995"));
+  CHECK_THAT(text.out, Catch::Contains("z=1.6m: IRI unavailable: it crosses 41 missing cells between x = 40 and 42 m"));
+  CHECK_THAT(text.out, Catch::Contains("over 9 of 11 lateral positions"));
+
+  // The wheel path clear of the holes keeps the whole road's IRI, to the bit.
+  const auto holed = nlohmann::json::parse(run_ssrfleet("road '" + crg + "' --json", dir).out);
+  const auto whole = nlohmann::json::parse(run_ssrfleet("road AS1 --json", dir).out);
+  const auto& paths = holed.at("iri").at("wheel_paths");
+  REQUIRE(paths.size() == 2);
+  CHECK(paths[0].at("iri_m_per_km").is_null());
+  CHECK(paths[0].at("unavailable") == "crosses 41 missing cells between x = 40 and 42 m");
+  CHECK(paths[1].at("iri_m_per_km") == whole.at("iri").at("wheel_paths")[1].at("iri_m_per_km"));
+  CHECK_FALSE(paths[1].contains("unavailable"));
+  CHECK(holed.at("missing_cells") == 245);
+  CHECK(holed.at("missing").at("lines_with_missing") == 7);
+  CHECK(holed.at("missing").at("groups").size() == 2);
+  CHECK(holed.at("missing").at("groups")[1].at("y_from_m").get<double>() == Approx(1.5));
+  CHECK(holed.at("missing").at("x_to_m").get<double>() == Approx(50.95));
+  CHECK(holed.at("psd_fit").at("lines") == 94);
+  CHECK(holed.at("roughness_class").at("class") == "A");
+
+  // Trucks cannot be driven over the holes: still exit 65, naming the file and the hole.
+  const auto simulate = run_ssrfleet("simulate --road '" + crg + "' --trucks 3 --quiet", dir);
+  CHECK(simulate.status == 65);
+  CHECK_THAT(simulate.err, Catch::Contains(crg) && Catch::Contains("245 missing cells, the first at x = 40 m, y = 1.5 m"));
+  const std::string log = dir.file("wim.csv");
+  REQUIRE(run_ssrfleet("simulate --road AS1 --trucks 3 --quiet --out '" + log + "'", dir).status == 0);
+  const auto fit = run_ssrfleet("fit '" + log + "' --road '" + crg + "' --particles 64 --quiet", dir);
+  CHECK(fit.status == 65);
+  CHECK_THAT(fit.err, Catch::Contains(crg) && Catch::Contains("missing cells"));
+  const std::string posterior = dir.file("posterior.json");
+  REQUIRE(run_ssrfleet("fit '" + log + "' --road AS1 --particles 64 --quiet --out '" + posterior + "'", dir).status == 0);
+  const auto predict = run_ssrfleet("predict --posterior '" + posterior + "' --road '" + crg + "' --quiet", dir);
+  CHECK(predict.status == 65);
+  CHECK_THAT(predict.err, Catch::Contains(crg) && Catch::Contains("245 missing cells, the first at x = 40 m, y = 1.5 m"));
+}
+
+TEST_CASE("road refuses to convert holes into a format without a missing value, and keeps them in OpenCRG",
+          "[cli][crg][erd]") {
+  test::TempDir dir;
+  const std::string crg = write_holed_as1(dir), erd = dir.file("paths.erd"), csv = dir.file("road.csv");
+  // ERD has no missing-value marker: a wheel path over a hole is refused before anything is written.
+  const auto over = run_ssrfleet("road '" + crg + "' --erd '" + erd + "'", dir);
+  CHECK(over.status == 65);
+  CHECK_THAT(over.err, Catch::Contains(crg) && Catch::Contains("--erd wheel path z = 1.6 m") &&
+                           Catch::Contains("crosses 41 missing cells between x = 40 and 42 m") &&
+                           Catch::Contains("positions clear of holes: y = 0.1 .. 1.45, 1.75 .. 5 m"));
+  CHECK(over.out.empty());
+  CHECK_FALSE(std::filesystem::exists(erd));
+  // Paths on measured road are written, and read back with the summary's IRI.
+  const auto clear = run_ssrfleet("road '" + crg + "' --erd '" + erd + "' --wheel-paths 1.0,3.4 --json", dir);
+  INFO(clear.err);
+  REQUIRE(clear.status == 0);
+  const road::LongitudinalProfiles profiles = road::read_erd_file(erd);
+  CHECK(profiles.profiles() == 2);
+  CHECK(profiles.height_m.allFinite());
+  const auto back = nlohmann::json::parse(run_ssrfleet("road '" + erd + "' --json", dir).out);
+  CHECK(back.at("iri").at("wheel_paths")[1].at("iri_m_per_km") ==
+        nlohmann::json::parse(clear.out).at("iri").at("wheel_paths")[1].at("iri_m_per_km"));
+  // A road CSV cannot hold a hole either; an OpenCRG file keeps every one.
+  const auto as_csv = run_ssrfleet("road '" + crg + "' --write '" + csv + "'", dir);
+  CHECK(as_csv.status == 65);
+  CHECK_THAT(as_csv.err, Catch::Contains("a road CSV has no marker for a missing height"));
+  CHECK_FALSE(std::filesystem::exists(csv));
+  const std::string copy = dir.file("copy.crg");
+  REQUIRE(run_ssrfleet("road '" + crg + "' --write '" + copy + "' --crg-format LDFI", dir).status == 0);
+  CHECK(road::read_crg_file(copy).report.missing_cells == 245);
 }
 
 TEST_CASE("a malformed OpenCRG road is refused with the file, the line and exit status 65", "[cli][crg]") {

@@ -231,6 +231,10 @@ TEST_CASE("a marginal-core checkpoint resumes bit-identically, and an old or cut
   BinaryReader cut_in(cut, "cut/checkpoint.bin");
   fleet::MarginalSmc third(c.site, options(64, 2, 9));
   CHECK_THROWS_WITH(third.restore(cut_in), Catch::Contains("cut/checkpoint.bin"));
+
+  // Another particle count: named as such, with the count to resume with.
+  fleet::MarginalSmc wider(c.site, options(128, 2, 9));
+  CHECK_THROWS_WITH(restore_from(wider, saved), Catch::Contains("holds 64 particles") && Catch::Contains("--particles 64"));
 }
 
 TEST_CASE("the marginal core's posterior agrees with the exact batch MCMC on a small fleet", "[marginal][mcmc]") {

@@ -242,6 +242,13 @@ TEST_CASE("a checkpoint from another seed or a corrupt one is refused", "[fleet]
     CHECK_THROWS_WITH(other_seed.restore(reader), Catch::Contains("another seed"));
   }
   {
+    fleet::FleetSmc more_particles(c.site, smc_options(64, 1, 1));
+    std::stringstream in(bytes);
+    BinaryReader reader(in, "ck.bin");
+    CHECK_THROWS_WITH(more_particles.restore(reader),
+                      Catch::Contains("holds 32 particles") && Catch::Contains("--particles 32"));
+  }
+  {
     fleet::FleetSmc same(c.site, smc_options(32, 1, 1));
     std::stringstream in(bytes.substr(0, bytes.size() / 2));  // truncated
     BinaryReader reader(in, "ck.bin");

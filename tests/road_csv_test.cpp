@@ -6,7 +6,9 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 #include "road/surface_csv.hpp"
@@ -126,4 +128,16 @@ TEST_CASE("a surface CSV that cannot be written is an IoError and leaves nothing
   const std::string file = (dir.path / "no_such_dir" / "out.csv").string();
   CHECK_THROWS_AS(write_surface_csv_file(s, file), ssrfleet::IoError);
   CHECK_FALSE(fs::exists(dir.path / "no_such_dir"));
+}
+
+TEST_CASE("a surface with a missing height is not written as CSV, which has no missing value", "[road][csv]") {
+  const TempDir dir;
+  Surface s;
+  s.name = "holed";
+  s.height_m = Eigen::ArrayXXd::Zero(3, 2);
+  s.height_m(1, 1) = std::numeric_limits<double>::quiet_NaN();
+  const std::string file = (dir.path / "out.csv").string();
+  CHECK_THROWS_AS(write_surface_csv_file(s, file), std::invalid_argument);
+  CHECK_FALSE(fs::exists(file));
+  CHECK(fs::is_empty(dir.path));  // nor the temporary
 }

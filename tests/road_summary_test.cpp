@@ -35,8 +35,9 @@ TEST_CASE("the summary of a preset describes its grid, PSD and IRI across the ro
   CHECK(sum.psd.gd_n0_m3 == Approx(20e-6).epsilon(0.35));
   CHECK(sum.psd.waviness == Approx(2.0).margin(0.15));
   REQUIRE(sum.iri_by_position.size() == 11);  // z = 0, 0.5, ..., 5.0
-  CHECK(sum.iri_by_position.back().first == Approx(5.0));
-  CHECK(sum.iri_by_position[3].second == iri_m_per_km(wheel_path(s, 1.5), s.dx_m));
+  CHECK(sum.iri_by_position.back().z_m == Approx(5.0));
+  CHECK(sum.iri_by_position[3].iri_m_per_km == iri_m_per_km(wheel_path(s, 1.5), s.dx_m));
+  CHECK(sum.iri_positions_measured == 11);
   CHECK(sum.iri_min_m_per_km <= sum.iri_mean_m_per_km);
   CHECK(sum.iri_mean_m_per_km <= sum.iri_max_m_per_km);
 
@@ -82,7 +83,7 @@ TEST_CASE("the roughness class is labelled with its table, and the paper's older
   CHECK(j.at("roughness_class").at("table") == "ISO draft 1982 (the paper's classes)");
 }
 
-TEST_CASE("the wheel paths' IRI is reported, and missing cells are counted, skipped or refused", "[road][summary]") {
+TEST_CASE("the wheel paths' IRI is reported, and missing cells are counted, mapped and skipped", "[road][summary]") {
   Surface s = preset_surface("AS1");
   SummaryOptions options;
   options.wheel_paths_m = {1.25, 3.75};
@@ -90,25 +91,49 @@ TEST_CASE("the wheel paths' IRI is reported, and missing cells are counted, skip
   REQUIRE(full.wheel_paths.size() == 2);
   CHECK(full.wheel_paths[1].label == "z=3.75m");
   CHECK(full.wheel_paths[1].iri_m_per_km == iri_m_per_km(wheel_path(s, 3.75), s.dx_m));
+  CHECK(full.wheel_paths[1].unavailable.empty());
   CHECK(full.missing_cells == 0);
+  CHECK(full.psd_whole_lines);
+  CHECK(full.psd_lines == 101);
   // Defaults: a 1.8 m track centred on the surface.
   CHECK(default_wheel_paths_m(s) == std::vector<double>{1.6, 3.4});
 
-  // A hole along the right edge (lines 0 and 1, 2 m of road): counted; the IRI positions over it
-  // report none; the PSD is fitted on the complete lines; a wheel path over it is refused.
+  // A hole along the right edge (lines 0 and 1, 2 m of road): counted and mapped; the IRI positions
+  // over it report none, with the reason; the PSD is fitted on the complete lines.
   s.height_m.block(400, 0, 40, 2).setConstant(std::numeric_limits<double>::quiet_NaN());
   const SurfaceSummary holed = summarize(s, options);
   CHECK(holed.missing_cells == 80);
-  CHECK(std::isnan(holed.iri_by_position[0].second));  // z = 0
-  CHECK(holed.iri_by_position[1].second == full.iri_by_position[1].second);  // z = 0.5: clear
+  REQUIRE(holed.missing.groups.size() == 1);
+  CHECK(holed.missing.groups[0].line_end == 2);
+  CHECK(std::isnan(holed.iri_by_position[0].iri_m_per_km));  // z = 0
+  CHECK(holed.iri_by_position[0].unavailable == "crosses 40 missing cells between x = 20 and 21.95 m");
+  CHECK(holed.iri_by_position[1].iri_m_per_km == full.iri_by_position[1].iri_m_per_km);  // z = 0.5: clear
+  CHECK(holed.iri_positions_measured == 10);
   CHECK(holed.psd.bins > 0);
+  CHECK(holed.psd_lines == 99);
+  // The same road less 2 of its 101 lines in the mean periodogram.
   CHECK(holed.psd.gd_n0_m3 == Approx(full.psd.gd_n0_m3).epsilon(0.05));
   CHECK(holed.wheel_paths[0].iri_m_per_km == full.wheel_paths[0].iri_m_per_km);
   CHECK(to_json(holed).at("iri").at("by_position")[0].at("iri_m_per_km").is_null());
+  CHECK(to_json(holed).at("iri").at("by_position")[0].at("unavailable") ==
+        "crosses 40 missing cells between x = 20 and 21.95 m");
   CHECK(to_json(holed).at("missing_cells") == 80);
-  options.wheel_paths_m = {0.02};
+
+  // A wheel path between the two holed lines reads both: it has no IRI, and the summary says why
+  // instead of refusing the road.
+  options.wheel_paths_m = {0.02, 3.75};
+  const SurfaceSummary over = summarize(s, options);
+  REQUIRE(over.wheel_paths.size() == 2);
+  CHECK(std::isnan(over.wheel_paths[0].iri_m_per_km));
+  CHECK(over.wheel_paths[0].unavailable == "crosses 80 missing cells between x = 20 and 21.95 m");
+  CHECK(over.wheel_paths[1].iri_m_per_km == full.wheel_paths[1].iri_m_per_km);
+  CHECK_THAT(to_text(over), Catch::Contains("z=0.02m: IRI unavailable: it crosses 80 missing cells between x = 20 and "
+                                            "21.95 m") &&
+                                Catch::Contains("80 cells in 2 of 101 lines") &&
+                                Catch::Contains("y = 0 .. 0.05 m (2 lines): 40 cells each, x = 20 .. 21.95 m"));
+  // Driving the path is still refused (wheel_path.hpp), naming the surface and the hole.
   try {
-    summarize(s, options);
+    complete_wheel_path(s, 0.02);
     FAIL("a wheel path over missing cells was accepted");
   } catch (const ssrfleet::DataError& e) {
     CHECK_THAT(e.what(), Catch::Contains("AS1") && Catch::Contains("wheel path z = 0.02 m") &&

@@ -7,6 +7,8 @@
 #include <functional>
 #include <string>
 
+#include <Eigen/Core>
+
 #include "site/site.hpp"
 #include "util/binary_io.hpp"
 
@@ -44,6 +46,17 @@ inline void read_checkpoint_header(BinaryReader& in, std::uint32_t version, cons
 inline void read_checkpoint_header(BinaryReader& in, std::uint32_t version, const site::Site& site, std::uint64_t seed,
                                    const std::function<std::string(std::uint32_t)>& explain_version) {
   read_checkpoint_header(in, version, site.fingerprint(), seed, explain_version);
+}
+
+// The particles' log weights, whose count must be this run's: a resume with another --particles
+// is named as such, not as a matrix of the wrong shape.
+inline Eigen::ArrayXd read_log_weights(BinaryReader& in, Eigen::Index particles) {
+  const Eigen::MatrixXd w = in.matrix("log_weights", -1, 1);
+  if (w.rows() != particles) {
+    in.fail("particles", "the state holds " + std::to_string(w.rows()) + " particles and this run asks for " +
+                             std::to_string(particles) + ": resume with --particles " + std::to_string(w.rows()));
+  }
+  return w.array();
 }
 
 }  // namespace ssrfleet::fleet

@@ -122,7 +122,7 @@ void FleetSmc::restore(BinaryReader& in) {
   smc::TemperedSampler::State state;
   state.stages_run = in.value<std::int32_t>("stages_run");
   state.log_evidence = in.value<double>("log_evidence");
-  state.log_weights = in.matrix("log_weights", sampler_.options().particles, 1).array();
+  state.log_weights = read_log_weights(in, sampler_.options().particles);
   const auto n = in.value<std::uint64_t>("truck_ids");
   if (n > 100'000'000) in.fail("truck_ids", "implausible truck count");
   truck_ids_.clear();

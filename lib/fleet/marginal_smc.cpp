@@ -211,7 +211,7 @@ void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {
   state.stages_run = in.value<std::int32_t>("stages_run");
   state.moves_run = in.value<std::int32_t>("moves_run");
   state.log_evidence = in.value<double>("log_evidence");
-  state.log_weights = in.matrix("log_weights", sampler_.options().particles, 1).array();
+  state.log_weights = read_log_weights(in, sampler_.options().particles);
   const std::uint64_t n = target_.load_particles(in);
   truck_ids_.clear();
   for (std::uint64_t i = 0; i < n; ++i) {

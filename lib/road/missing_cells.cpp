@@ -21,6 +21,7 @@ MissingCells find_missing(const Surface& surface, Eigen::Index row_begin, Eigen:
     for (Eigen::Index i = row_begin; i < row_end; ++i) {
       if (!is_missing(line[i])) continue;
       ++m.count;
+      m.last_row = std::max(m.last_row, i);
       if (m.first_row < 0 || i < m.first_row || (i == m.first_row && j < m.first_line)) {
         m.first_row = i;
         m.first_line = j;
@@ -50,6 +51,18 @@ std::string describe(const MissingCells& missing, const Surface& surface) {
   os << missing.count << " missing cell" << (missing.count == 1 ? "" : "s")
      << ", the first at x = " << surface.dx_m * static_cast<double>(missing.first_row)
      << " m, y = " << surface.lateral_m(missing.first_line) << " m";
+  return os.str();
+}
+
+std::string describe_span(const MissingCells& missing, const Surface& surface) {
+  if (missing.count == 0) return "no missing cells";
+  std::ostringstream os;
+  os.precision(6);
+  const double from_m = surface.dx_m * static_cast<double>(missing.first_row);
+  const double to_m = surface.dx_m * static_cast<double>(missing.last_row);
+  os << missing.count << " missing cell" << (missing.count == 1 ? "" : "s");
+  if (missing.first_row == missing.last_row) os << " at x = " << from_m << " m";
+  else os << " between x = " << from_m << " and " << to_m << " m";
   return os.str();
 }
 

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <istream>
+#include <stdexcept>
 #include <ostream>
 #include <string_view>
 #include <system_error>
@@ -199,6 +200,10 @@ Surface read_surface_csv_file(const std::string& path) {
 }
 
 void write_surface_csv(const Surface& surface, std::ostream& out) {
+  if (!surface.height_m.allFinite()) {
+    throw std::invalid_argument("write_surface_csv: the surface '" + surface.name +
+                                "' has a missing or non-finite height, which a road CSV cannot hold");
+  }
   std::string buffer;
   buffer.reserve(static_cast<std::size_t>(surface.lines()) * 24 + 16);
   buffer = "# ssrfleet road surface";

@@ -32,6 +32,8 @@ Surface read_surface_csv_file(const std::string& path);
 
 // Shortest round-trip decimal form of every number (std::to_chars), so write -> read gives the
 // same doubles bit for bit (heights, dx, y0 and dy). x_i is written as i * dx, y_j as y0 + j dy.
+// The format has no missing value: a missing (NaN) or infinite height throws std::invalid_argument
+// before anything is written, rather than write a file that does not read back.
 void write_surface_csv(const Surface& surface, std::ostream& out);
 // Atomic: writes `path.tmp.<pid>` and renames it onto `path`, so a failure never leaves a
 // partial file. Failure -> ssrfleet::IoError naming the path.

@@ -6,9 +6,12 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "road/iri.hpp"
+#include "road/measured_part.hpp"
 #include "road/missing_cells.hpp"
+#include "road/missing_map.hpp"
 #include "road/wheel_path.hpp"
 #include "util/check.hpp"
 
@@ -35,26 +38,24 @@ double rms_of_measured(const Eigen::ArrayXXd& heights) {
   return std::sqrt(sum_sq / static_cast<double>(n));
 }
 
-// The PSD fit over the lines with no missing cell (a hole would leak into every frequency), and
-// the roughness class of its level.
+// The PSD fit over the measured part (measured_part.hpp), and the roughness class of its level.
 void fit_roughness(const Surface& surface, RoughnessTable table, SurfaceSummary& s) {
-  s.psd_band_lo_cpm = std::max(0.05, 4.0 / s.length_m);
+  const MeasuredPart part = measured_part(surface);
+  s.psd_whole_lines = part.whole_lines;
+  s.psd_lines = static_cast<Eigen::Index>(part.lines.size());
+  s.psd_x_from_m = surface.dx_m * static_cast<double>(part.row_begin);
+  s.psd_x_to_m = surface.dx_m * static_cast<double>(std::max<Eigen::Index>(part.row_begin, part.row_end - 1));
+  if (part.lines.empty()) return;
+  const double length_m = s.psd_x_to_m - s.psd_x_from_m;
   s.psd_band_hi_cpm = std::min(5.0, 0.25 / surface.dx_m);
-  if (surface.samples() < 4 || !(s.psd_band_hi_cpm > 2.0 * s.psd_band_lo_cpm)) return;
-  Surface complete = surface;
-  if (s.missing_cells > 0) {
-    std::vector<Eigen::Index> keep;
-    for (Eigen::Index j = 0; j < surface.lines(); ++j) {
-      if (!surface.height_m.col(j).isNaN().any()) keep.push_back(j);
-    }
-    if (keep.empty()) return;
-    complete.height_m.resize(surface.samples(), static_cast<Eigen::Index>(keep.size()));
-    for (std::size_t k = 0; k < keep.size(); ++k) {
-      complete.height_m.col(static_cast<Eigen::Index>(k)) = surface.height_m.col(keep[k]);
-    }
-  }
+  if (!(length_m > 0.0)) return;
+  s.psd_band_lo_cpm = std::max(0.05, 4.0 / length_m);
+  if (part.row_end - part.row_begin < 4 || !(s.psd_band_hi_cpm > 2.0 * s.psd_band_lo_cpm)) return;
   try {
-    s.psd = fit_psd(complete, s.psd_band_lo_cpm, s.psd_band_hi_cpm);
+    s.psd = fit_psd(part.whole_lines && part.lines.size() == static_cast<std::size_t>(surface.lines())
+                        ? surface
+                        : extract(surface, part),
+                    s.psd_band_lo_cpm, s.psd_band_hi_cpm);
   } catch (const std::invalid_argument&) {
     s.psd = PsdFit{};  // too few frequency bins for a fit: reported as bins = 0
     return;
@@ -62,18 +63,35 @@ void fit_roughness(const Surface& surface, RoughnessTable table, SurfaceSummary&
   if (s.psd.gd_n0_m3 > 0.0 && std::isfinite(s.psd.gd_n0_m3)) s.roughness_class = roughness_class(s.psd.gd_n0_m3, table);
 }
 
+// The IRI of the wheel path at z, or why there is none.
+WheelPathRoughness path_roughness(const Surface& surface, double z_m, std::string label) {
+  WheelPathRoughness w{std::move(label), z_m, std::numeric_limits<double>::quiet_NaN(), {}};
+  const MissingCells missing = missing_on_path(surface, z_m);
+  if (missing.count > 0) w.unavailable = "crosses " + describe_span(missing, surface);
+  else w.iri_m_per_km = iri_m_per_km(wheel_path(surface, z_m), surface.dx_m);
+  return w;
+}
+
+std::string path_label(double z_m) {
+  std::ostringstream label;
+  label.precision(4);
+  label << "z=" << z_m << "m";
+  return label.str();
+}
+
 void iri_statistics(SurfaceSummary& s) {
   double sum = 0.0;
   int n = 0;
   s.iri_min_m_per_km = std::numeric_limits<double>::infinity();
   s.iri_max_m_per_km = -std::numeric_limits<double>::infinity();
-  for (const auto& [z, iri] : s.iri_by_position) {
-    if (std::isnan(iri)) continue;
-    sum += iri;
+  for (const WheelPathRoughness& p : s.iri_by_position) {
+    if (std::isnan(p.iri_m_per_km)) continue;
+    sum += p.iri_m_per_km;
     ++n;
-    s.iri_min_m_per_km = std::min(s.iri_min_m_per_km, iri);
-    s.iri_max_m_per_km = std::max(s.iri_max_m_per_km, iri);
+    s.iri_min_m_per_km = std::min(s.iri_min_m_per_km, p.iri_m_per_km);
+    s.iri_max_m_per_km = std::max(s.iri_max_m_per_km, p.iri_m_per_km);
   }
+  s.iri_positions_measured = n;
   if (n == 0) {
     s.iri_min_m_per_km = s.iri_max_m_per_km = 0.0;
     return;
@@ -99,25 +117,22 @@ SurfaceSummary summarize(const Surface& surface, const SummaryOptions& options) 
   s.lines = surface.lines();
   s.dx_m = surface.dx_m;
   s.dy_m = surface.dy_m;
+  s.y0_m = surface.y0_m;
   s.length_m = surface.length_m();
   s.width_m = surface.y_max_m() - surface.y0_m;
-  s.missing_cells = find_missing(surface).count;
+  s.missing = map_missing(surface);
+  s.missing_cells = s.missing.cells;
   s.rms_height_m = rms_of_measured(surface.height_m);
   fit_roughness(surface, options.table, s);
 
   const Eigen::Index k = iri_smoothing_points(surface.dx_m);
   if (surface.samples() < k + 1) return s;
   const std::vector<double> paths = options.wheel_paths_m.empty() ? default_wheel_paths_m(surface) : options.wheel_paths_m;
-  for (const double z : paths) {
-    const LongitudinalProfiles p = wheel_path_profiles(surface, {z});
-    s.wheel_paths.push_back({p.labels.front(), z, iri_m_per_km(p.height_m.col(0), surface.dx_m)});
-  }
+  for (const double z : paths) s.wheel_paths.push_back(path_roughness(surface, z, path_label(z)));
   const auto steps = static_cast<long>(std::floor(s.width_m / options.iri_step_m + 1e-9));
   for (long i = 0; i <= steps; ++i) {
     const double z = std::min(surface.y0_m + static_cast<double>(i) * options.iri_step_m, surface.y_max_m());
-    const Eigen::ArrayXd path = wheel_path(surface, z);
-    const double iri = path.isNaN().any() ? std::numeric_limits<double>::quiet_NaN() : iri_m_per_km(path, surface.dx_m);
-    s.iri_by_position.emplace_back(z, iri);
+    s.iri_by_position.push_back(path_roughness(surface, z, path_label(z)));
   }
   iri_statistics(s);
   return s;
@@ -135,13 +150,18 @@ SurfaceSummary summarize(const LongitudinalProfiles& profiles, RoughnessTable ta
   s.lines = profiles.profiles();
   s.dx_m = profiles.dx_m;
   s.length_m = profiles.length_m();
-  s.missing_cells = find_missing(as_lines).count;
+  s.missing = map_missing(as_lines);
+  s.missing_cells = s.missing.cells;
   s.rms_height_m = rms_of_measured(profiles.height_m);
   fit_roughness(as_lines, table, s);
   if (profiles.samples() >= iri_smoothing_points(profiles.dx_m) + 1) {
     for (Eigen::Index k = 0; k < profiles.profiles(); ++k) {
-      s.wheel_paths.push_back({profiles.labels[static_cast<std::size_t>(k)], std::numeric_limits<double>::quiet_NaN(),
-                               iri_m_per_km(profiles.height_m.col(k), profiles.dx_m)});
+      WheelPathRoughness w{profiles.labels[static_cast<std::size_t>(k)], std::numeric_limits<double>::quiet_NaN(),
+                           std::numeric_limits<double>::quiet_NaN(), {}};
+      const MissingCells missing = find_missing(as_lines, 0, as_lines.samples(), k, k + 1);
+      if (missing.count > 0) w.unavailable = "has " + describe_span(missing, as_lines);
+      else w.iri_m_per_km = iri_m_per_km(profiles.height_m.col(k), profiles.dx_m);
+      s.wheel_paths.push_back(std::move(w));
     }
   }
   return s;
@@ -149,47 +169,88 @@ SurfaceSummary summarize(const LongitudinalProfiles& profiles, RoughnessTable ta
 
 std::string to_text(const SurfaceSummary& s) {
   std::ostringstream os;
-  os << (s.dy_m > 0.0 ? "road surface " : "road profiles ") << (s.name.empty() ? "(unnamed)" : s.name) << "\n";
-  if (s.dy_m > 0.0) {
+  const bool surface = s.dy_m > 0.0;
+  os << (surface ? "road surface " : "road profiles ") << (s.name.empty() ? "(unnamed)" : s.name) << "\n";
+  if (surface) {
     os << "  grid        " << s.samples << " x " << s.lines << " samples, dx " << s.dx_m << " m, dy " << s.dy_m
        << " m (" << s.length_m << " m long, " << s.width_m << " m wide)\n";
   } else {
     os << "  profiles    " << s.lines << " of " << s.samples << " samples, dx " << s.dx_m << " m (" << s.length_m
        << " m long)\n";
   }
-  os << "  missing     " << s.missing_cells << " cells\n";
+  os << "  missing     " << s.missing_cells << " cells";
+  if (s.missing_cells > 0) {
+    os << " in " << s.missing.lines_with_missing << " of " << s.lines << (surface ? " lines" : " profiles");
+    if (surface) {
+      os << ":\n" << describe_map(s.missing, {s.dx_m, s.y0_m, s.dy_m}, "    ");
+    } else {
+      os << "\n";
+    }
+  } else {
+    os << "\n";
+  }
   os << std::setprecision(3);
-  os << "  rms height  " << s.rms_height_m * 1e3 << " mm\n";
+  os << "  rms height  " << s.rms_height_m * 1e3 << " mm" << (s.missing_cells > 0 ? " (of the measured cells)" : "")
+     << "\n";
   if (s.psd.bins > 0) {
     os << "  PSD fit     G_d(" << s.psd.n0_cpm << " cycle/m) = " << s.psd.gd_n0_m3 * 1e6 << "e-6 m^3, w = "
        << s.psd.waviness << " (" << s.psd_band_lo_cpm << "-" << s.psd_band_hi_cpm << " cycle/m, " << s.psd.bins
        << " bins)\n";
+    if (s.missing_cells > 0) {
+      os << std::setprecision(6) << "              on " << s.psd_lines << " of " << s.lines
+         << (surface ? " lines" : " profiles");
+      if (s.psd_whole_lines) os << " (those with no missing cell)\n";
+      else os << " over x = " << s.psd_x_from_m << " .. " << s.psd_x_to_m << " m (the longest stretch clear of holes)\n";
+      os << std::setprecision(3);
+    }
     os << "  class       " << s.roughness_class.label << " in " << s.roughness_class.table << "\n";
   } else {
-    os << "  PSD fit     none (surface too short or too coarse, or no line without missing cells)\n";
+    os << "  PSD fit     none (";
+    if (s.psd_lines == 0) os << "nothing measured";
+    else if (!s.psd_whole_lines)
+      os << std::setprecision(6) << "the longest stretch clear of holes, x = " << s.psd_x_from_m << " .. "
+         << s.psd_x_to_m << " m, is too short" << std::setprecision(3);
+    else os << "surface too short or too coarse";
+    os << ")\n";
   }
   for (const WheelPathRoughness& w : s.wheel_paths) {
-    os << "  wheel path  " << w.label << ": IRI " << w.iri_m_per_km << " m/km\n";
+    os << "  wheel path  " << w.label << ": IRI ";
+    if (w.unavailable.empty()) os << w.iri_m_per_km << " m/km\n";
+    else os << "unavailable: it " << w.unavailable << "\n";
   }
   if (!s.iri_by_position.empty()) {
-    os << "  IRI         min " << s.iri_min_m_per_km << ", mean " << s.iri_mean_m_per_km << ", max "
-       << s.iri_max_m_per_km << " m/km over " << s.iri_by_position.size() << " lateral positions\n";
-    for (const auto& [z, iri] : s.iri_by_position) {
-      os << "    z = " << z << " m: ";
-      if (std::isnan(iri)) os << "- (crosses missing cells)\n";
-      else os << iri << " m/km\n";
+    const std::size_t n = s.iri_by_position.size();
+    os << "  IRI         ";
+    if (s.iri_positions_measured > 0) {
+      os << "min " << s.iri_min_m_per_km << ", mean " << s.iri_mean_m_per_km << ", max " << s.iri_max_m_per_km
+         << " m/km over ";
+    } else {
+      os << "unavailable at all ";
+    }
+    if (s.iri_positions_measured > 0 && static_cast<std::size_t>(s.iri_positions_measured) < n) {
+      os << s.iri_positions_measured << " of ";
+    }
+    os << n << " lateral positions\n";
+    for (const WheelPathRoughness& p : s.iri_by_position) {
+      os << "    z = " << p.z_m << " m: ";
+      if (p.unavailable.empty()) os << p.iri_m_per_km << " m/km\n";
+      else os << "unavailable (" << p.unavailable << ")\n";
     }
   }
   return os.str();
 }
 
 nlohmann::json to_json(const SurfaceSummary& s) {
+  const auto roughness_json = [](const WheelPathRoughness& w, bool with_label) {
+    nlohmann::json j = {{"z_m", number_or_null(w.z_m)}, {"iri_m_per_km", number_or_null(w.iri_m_per_km)}};
+    if (with_label) j["label"] = w.label;
+    if (!w.unavailable.empty()) j["unavailable"] = w.unavailable;
+    return j;
+  };
   nlohmann::json iri_positions = nlohmann::json::array();
-  for (const auto& [z, iri] : s.iri_by_position) iri_positions.push_back({{"z_m", z}, {"iri_m_per_km", number_or_null(iri)}});
+  for (const WheelPathRoughness& p : s.iri_by_position) iri_positions.push_back(roughness_json(p, false));
   nlohmann::json wheel_paths = nlohmann::json::array();
-  for (const WheelPathRoughness& w : s.wheel_paths) {
-    wheel_paths.push_back({{"label", w.label}, {"z_m", number_or_null(w.z_m)}, {"iri_m_per_km", w.iri_m_per_km}});
-  }
+  for (const WheelPathRoughness& w : s.wheel_paths) wheel_paths.push_back(roughness_json(w, true));
   nlohmann::json roughness = nullptr;
   if (!s.roughness_class.label.empty()) {
     roughness = {{"class", s.roughness_class.label},
@@ -198,6 +259,14 @@ nlohmann::json to_json(const SurfaceSummary& s) {
                  {"gd_n0_upper_m3", number_or_null(std::isinf(s.roughness_class.upper_m3)
                                                        ? std::numeric_limits<double>::quiet_NaN()
                                                        : s.roughness_class.upper_m3)}};
+  }
+  nlohmann::json missing = to_json(s.missing, {s.dx_m, s.y0_m, s.dy_m});
+  if (!(s.dy_m > 0.0)) {  // profiles: no lateral positions
+    missing.erase("clear_of_holes");
+    for (nlohmann::json& g : missing.at("groups")) {
+      g.erase("y_from_m");
+      g.erase("y_to_m");
+    }
   }
   return {
       {"name", s.name},
@@ -208,6 +277,7 @@ nlohmann::json to_json(const SurfaceSummary& s) {
       {"length_m", s.length_m},
       {"width_m", s.width_m},
       {"missing_cells", s.missing_cells},
+      {"missing", missing},
       {"rms_height_m", s.rms_height_m},
       {"psd_fit",
        {{"gd_n0_m3", s.psd.gd_n0_m3},
@@ -215,11 +285,16 @@ nlohmann::json to_json(const SurfaceSummary& s) {
         {"n0_cpm", s.psd.n0_cpm},
         {"bins", s.psd.bins},
         {"band_lo_cpm", s.psd_band_lo_cpm},
-        {"band_hi_cpm", s.psd_band_hi_cpm}}},
+        {"band_hi_cpm", s.psd_band_hi_cpm},
+        {"lines", s.psd_lines},
+        {"whole_lines", s.psd_whole_lines},
+        {"x_from_m", s.psd_x_from_m},
+        {"x_to_m", s.psd_x_to_m}}},
       {"roughness_class", roughness},
       {"iri",
        {{"wheel_paths", wheel_paths},
         {"by_position", iri_positions},
+        {"positions_measured", s.iri_positions_measured},
         {"min_m_per_km", s.iri_min_m_per_km},
         {"mean_m_per_km", s.iri_mean_m_per_km},
         {"max_m_per_km", s.iri_max_m_per_km}}},

@@ -34,10 +34,14 @@ Eigen::ArrayXd wheel_path(const Surface& surface, double z_m) {
   return (1.0 - b.weight_b) * surface.height_m.col(b.line_a) + b.weight_b * surface.height_m.col(b.line_b);
 }
 
-Eigen::ArrayXd complete_wheel_path(const Surface& surface, double z_m) {
+MissingCells missing_on_path(const Surface& surface, double z_m) {
   const LateralBracket b = bracket(surface, z_m);
   const Eigen::Index last = b.weight_b == 0.0 ? b.line_a : b.line_b;
-  const MissingCells missing = find_missing(surface, 0, surface.samples(), b.line_a, last + 1);
+  return find_missing(surface, 0, surface.samples(), b.line_a, last + 1);
+}
+
+Eigen::ArrayXd complete_wheel_path(const Surface& surface, double z_m) {
+  const MissingCells missing = missing_on_path(surface, z_m);
   if (missing.count > 0) {
     std::ostringstream where;
     where << "wheel path z = " << z_m << " m";

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include "road/longitudinal_profiles.hpp"
+#include "road/missing_cells.hpp"
 #include "road/surface.hpp"
 
 namespace ssrfleet::road {
@@ -25,6 +26,9 @@ struct LateralBracket {
 LateralBracket bracket(const Surface& surface, double z_m);
 
 Eigen::ArrayXd wheel_path(const Surface& surface, double z_m);
+
+// The missing cells a wheel path at z reads (those of the one or two lines it interpolates).
+MissingCells missing_on_path(const Surface& surface, double z_m);
 
 // The wheel path at z, refusing one that reads a missing cell (missing_cells.hpp): DataError
 // naming the surface, z, and how many missing cells it crosses and where the first is.
