@@ -28,7 +28,7 @@ int run_diagnose(int argc, const char* const argv[]) {
   const int kCheckFamilies = static_cast<int>(fleet::CheckKind::kCount);
   std::string catalogue;
   for (const auto& name : fleet::extension_names()) {
-    if (!catalogue.empty()) catalogue += ",";
+    if (!catalogue.empty()) catalogue += ", ";
     catalogue += name;
   }
   po::options_description desc("diagnose options");
@@ -55,7 +55,7 @@ int run_diagnose(int argc, const char* const argv[]) {
       ("holdout", po::value(&o.holdout_fraction)->value_name("X")->default_value(o.holdout_fraction),
        "share of the trucks (the last ones) that score held-out skill")
       ("candidates", po::value(&candidates)->value_name("LIST"),
-       ("effects to consider, comma-separated (default: all of " + catalogue + "; ssrfleet effects describes them)").c_str())
+       ("effects to consider, comma-separated (default: all of them: " + catalogue + "; ssrfleet effects describes them)").c_str())
       ("max-effects", po::value(&o.max_effects)->value_name("N")->default_value(o.max_effects),
        "effects added at most: after each, diagnose checks again and looks for the next while a check fails")
       ("shortlist-only", po::bool_switch(&o.shortlist_only),
