@@ -17,7 +17,8 @@ namespace {
 
 // Columns a UTF-8 string takes (its code points: the help's µ, σ and × are one column each).
 int columns(const std::string& s) {
-  return static_cast<int>(std::count_if(s.begin(), s.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+  return static_cast<int>(std::count_if(
+      s.begin(), s.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
 }
 
 std::vector<std::string> split(const std::string& text, char sep) {
@@ -56,7 +57,8 @@ HelpRow option_row(const po::option_description& option) {
 // options, then each group added to it); program_options keeps the groups to itself, so they are
 // read back from its own listing, where a caption is a line "CAPTION:" and an option's first line
 // starts "  " followed by its name as format_name() writes it.
-std::vector<std::pair<std::string, std::vector<const po::option_description*>>> sections_of(const po::options_description& desc) {
+std::vector<std::pair<std::string, std::vector<const po::option_description*>>> sections_of(
+    const po::options_description& desc) {
   std::ostringstream listing;
   listing << desc;
   std::vector<std::pair<std::string, std::vector<const po::option_description*>>> sections;
@@ -67,10 +69,12 @@ std::vector<std::pair<std::string, std::vector<const po::option_description*>>> 
       sections.push_back({sections.empty() ? "Options" : line.substr(0, line.size() - 1), {}});
       continue;
     }
-    if (line.size() < 3 || line.compare(0, 2, "  ") != 0 || line[2] == ' ') continue;  // a description's next line
+    if (line.size() < 3 || line.compare(0, 2, "  ") != 0 || line[2] == ' ')
+      continue;  // a description's next line
     for (const auto& option : desc.options()) {
       const std::string name = "  " + option->format_name();
-      if (line.compare(0, name.size(), name) == 0 && (line.size() == name.size() || line[name.size()] == ' ') &&
+      if (line.compare(0, name.size(), name) == 0 &&
+          (line.size() == name.size() || line[name.size()] == ' ') &&
           std::find(placed.begin(), placed.end(), option.get()) == placed.end()) {
         if (sections.empty()) sections.push_back({"Options", {}});
         sections.back().second.push_back(option.get());
@@ -169,7 +173,8 @@ std::string format_options(const po::options_description& desc, int width) {
     if (options.empty()) continue;
     std::vector<HelpRow> rows;
     for (const auto* option : options) rows.push_back(option_row(*option));
-    out += (out.empty() ? "" : "\n") + caption + ":\n" + format_rows(rows, width, std::max(24, width * 2 / 5));
+    out +=
+        (out.empty() ? "" : "\n") + caption + ":\n" + format_rows(rows, width, std::max(24, width * 2 / 5));
   }
   return out;
 }

@@ -120,7 +120,8 @@ std::vector<std::string> split_tokens(const std::string& text, std::optional<int
         tail.find_first_of("=,.") != std::string::npos) {
       where("a number is cut in two");
     }
-    if (is_word_char(a) && is_word_char(b) && tail.find(',') != std::string::npos && head.find(',') != std::string::npos) {
+    if (is_word_char(a) && is_word_char(b) && tail.find(',') != std::string::npos &&
+        head.find(',') != std::string::npos) {
       where("a list is cut in two");
     }
   }
@@ -158,8 +159,7 @@ std::filesystem::path build_dir() { return std::filesystem::path(SSRFLEET_BINARY
 
 }  // namespace
 
-TEST_CASE("the check for split tokens finds the splits of program_options' own wrapping and passes a clean wrap",
-          "[cli][help]") {
+TEST_CASE("the check for split tokens finds program_options' splits and passes a wrap on spaces", "[cli][help]") {
   // program_options at 80 columns, as simulate and diagnose printed their help with it.
   const std::string old_simulate =
       "  --model arg                simulate with effects the base model leaves out: \n"
@@ -182,7 +182,7 @@ TEST_CASE("the check for split tokens finds the splits of program_options' own w
   // end in an identifier and the next start with a word): the comparison with the unwrapped help
   // in the next case finds such a split.
   CHECK(split_tokens(old_diagnose).size() == 1);
-  CHECK(split_tokens(old_fit).size() == 1);       // sensor_gain / :sensor=11
+  CHECK(split_tokens(old_fit).size() == 1);  // sensor_gain / :sensor=11
   // The same words wrapped on spaces: nothing to report, at any width.
   const std::string clean =
       "  --model SPEC   simulate with effects joined by '+', e.g.\n"
@@ -194,7 +194,7 @@ TEST_CASE("the check for split tokens finds the splits of program_options' own w
   CHECK(split_tokens(clean, 40).size() == 3);  // three lines of several words past 40 columns
 }
 
-TEST_CASE("every command's help keeps each token whole at any width, names its placeholders, and help CMD prints it",
+TEST_CASE("every command's help keeps each token whole at any width and names its placeholders, and help CMD is it",
           "[cli][help]") {
   test::TempDir dir;
   const std::string general = help_text("--help", std::nullopt, dir);
@@ -213,10 +213,11 @@ TEST_CASE("every command's help keeps each token whole at any width, names its p
     // The widest rendering wraps nothing: the words every narrower one must keep whole.
     const std::string wide = help_text(page, 1000, dir);
     const auto wide_words = word_counts(wide);
-    for (const std::optional<int> columns : {std::optional<int>(40), std::optional<int>(80), std::optional<int>(200),
-                                             std::optional<int>()}) {
+    for (const std::optional<int> columns :
+         {std::optional<int>(40), std::optional<int>(80), std::optional<int>(200), std::optional<int>()}) {
       const std::string text = help_text(page, columns, dir);
-      INFO("ssrfleet " << page << " at COLUMNS=" << (columns ? std::to_string(*columns) : "unset") << ":\n" << text);
+      INFO("ssrfleet " << page << " at COLUMNS=" << (columns ? std::to_string(*columns) : "unset") << ":\n"
+                       << text);
       // Without COLUMNS (and not on a terminal) the help is 80 columns wide.
       std::string problems;
       for (const auto& p : split_tokens(text, columns.value_or(80))) problems += p + "\n";
@@ -232,12 +233,13 @@ TEST_CASE("every command's help keeps each token whole at any width, names its p
   CHECK(unknown.err.find("unknown command 'frobnicate'") != std::string::npos);
 }
 
-TEST_CASE("effects prints the catalogue: every effect with its parameters, units and ranges, and the spec syntax",
-          "[cli][help]") {
+TEST_CASE(
+    "effects prints the catalogue: every effect with its parameters, units and ranges, and the spec syntax",
+    "[cli][help]") {
   test::TempDir dir;
   const std::string text = help_text("effects", std::nullopt, dir);
-  for (const char* effect : {"sensor_gain", "tyre_damping", "unsprung_mass", "suspension_damping", "profile_defect",
-                             "speed_bias", "second_class"}) {
+  for (const char* effect : {"sensor_gain", "tyre_damping", "unsprung_mass", "suspension_damping",
+                             "profile_defect", "speed_bias", "second_class"}) {
     INFO(effect);
     CHECK(text.find(std::string("\n") + effect + ": ") != std::string::npos);
   }
@@ -248,29 +250,33 @@ TEST_CASE("effects prints the catalogue: every effect with its parameters, units
   const std::string twelve = help_text("effects --sensors 76,1.5,12", std::nullopt, dir);
   CHECK(twelve.find("sensor      no unit; in [0.5, 12.5]") != std::string::npos);
   // The vehicle constants' null values are the site's.
-  CHECK(help_text("effects --ct 300", std::nullopt, dir).find("c_t         N s/m; in [0, 10000]; null value 300") !=
-        std::string::npos);
+  CHECK(help_text("effects --ct 300", std::nullopt, dir)
+            .find("c_t         N s/m; in [0, 10000]; null value 300") != std::string::npos);
 }
 
-TEST_CASE("help2man makes a command's manual page from its help, with NAME, SYNOPSIS and OPTIONS", "[cli][help][man]") {
+TEST_CASE("help2man makes a command's manual page from its help, with NAME, SYNOPSIS and OPTIONS",
+          "[cli][help][man]") {
   test::TempDir dir;
   const std::string page = dir.file("ssrfleet-fit.1");
   const std::string script = std::string(SSRFLEET_SOURCE_DIR) + "/bin/man_page.sh";
-  const int status = std::system(("sh " + q(script) + " " + q(SSRFLEET_BINARY) + " " + q(page) + " fit").c_str());
+  const int status =
+      std::system(("sh " + q(script) + " " + q(SSRFLEET_BINARY) + " " + q(page) + " fit").c_str());
   REQUIRE(WIFEXITED(status));
   REQUIRE(WEXITSTATUS(status) == 0);
   const std::string text = test::read_text(page);
   INFO(text);
-  for (const char* section : {".SH NAME", ".SH SYNOPSIS", ".SH DESCRIPTION", ".SH OPTIONS", ".SH \"SEE ALSO\""}) {
+  for (const char* section :
+       {".SH NAME", ".SH SYNOPSIS", ".SH DESCRIPTION", ".SH OPTIONS", ".SH \"SEE ALSO\""}) {
     CHECK(text.find(section) != std::string::npos);
   }
   CHECK(text.find("ssrfleet-fit \\- fit the fleet posterior") != std::string::npos);
-  CHECK(text.find(".B ssrfleet") != std::string::npos);              // the synopsis, from the usage line
+  CHECK(text.find(".B ssrfleet") != std::string::npos);                  // the synopsis, from the usage line
   CHECK(text.find("\\fB\\-\\-particles\\fR N\n") != std::string::npos);  // an option and its placeholder
-  CHECK(text.find(".SS \"SMC options:\"") != std::string::npos);    // a group of options
+  CHECK(text.find(".SS \"SMC options:\"") != std::string::npos);         // a group of options
 }
 
-TEST_CASE("cmake --install puts the command, its manual pages and the documents in the prefix", "[cli][install]") {
+TEST_CASE("cmake --install puts the command, its manual pages and the documents in the prefix",
+          "[cli][install]") {
   test::TempDir dir;
   const std::filesystem::path prefix = dir.path() / "prefix";
   const std::string build = build_dir().string();
@@ -285,9 +291,11 @@ TEST_CASE("cmake --install puts the command, its manual pages and the documents 
 
   const std::filesystem::path binary = prefix / "bin" / "ssrfleet";
   REQUIRE(std::filesystem::exists(binary));
-  CHECK((std::filesystem::status(binary).permissions() & std::filesystem::perms::owner_exec) != std::filesystem::perms::none);
+  CHECK((std::filesystem::status(binary).permissions() & std::filesystem::perms::owner_exec) !=
+        std::filesystem::perms::none);
   run(q(binary.string()) + " --version");
-  if (std::filesystem::exists(build_dir() / "ssrfleet-mpi")) CHECK(std::filesystem::exists(prefix / "bin" / "ssrfleet-mpi"));
+  if (std::filesystem::exists(build_dir() / "ssrfleet-mpi"))
+    CHECK(std::filesystem::exists(prefix / "bin" / "ssrfleet-mpi"));
   // A page for ssrfleet and for every command its help lists.
   const std::filesystem::path man = prefix / "share" / "man" / "man1";
   CHECK(std::filesystem::exists(man / "ssrfleet.1"));
