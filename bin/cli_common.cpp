@@ -18,15 +18,16 @@ namespace ssrfleet::cli {
 
 void SiteFlags::add_to(po::options_description& desc, bool with_sensors) {
   desc.add_options()
-      ("envelopment", po::value(&envelopment_m)->default_value(envelopment_m, shortest_text(envelopment_m)),
+      ("envelopment", po::value(&envelopment_m)->value_name("LENGTH")->default_value(envelopment_m, shortest_text(envelopment_m)),
        "tyre envelopment: moving-average base length along travel (m); 0 = off");
   if (with_sensors) {
-    desc.add_options()("sensors", po::value(&sensors)->default_value(sensors), "sensor array as FIRST_M,SPACING_M,COUNT");
+    desc.add_options()("sensors", po::value(&sensors)->value_name("FIRST,SPACING,COUNT")->default_value(sensors),
+                       "the sensor array: the first sensor's position (m), the spacing (m) and the number of sensors");
   }
   desc.add_options()
-      ("m1", po::value(&m1_kg)->default_value(m1_kg), "unsprung mass m1 (kg)")
-      ("cb", po::value(&cb_nspm)->default_value(cb_nspm), "suspension damping c_b (N s/m)")
-      ("ct", po::value(&ct_nspm)->default_value(ct_nspm), "tyre damping c_t (N s/m); 0 in the paper");
+      ("m1", po::value(&m1_kg)->value_name("MASS")->default_value(m1_kg), "unsprung mass m1 (kg)")
+      ("cb", po::value(&cb_nspm)->value_name("DAMPING")->default_value(cb_nspm), "suspension damping c_b (N s/m)")
+      ("ct", po::value(&ct_nspm)->value_name("DAMPING")->default_value(ct_nspm), "tyre damping c_t (N s/m); 0 in the paper");
 }
 
 site::SiteOptions SiteFlags::to_options() const {
@@ -59,25 +60,6 @@ std::string shortest_text(double value) {
   char buffer[32];
   const auto end = std::to_chars(buffer, buffer + sizeof buffer, value).ptr;
   return std::string(buffer, end);
-}
-
-bool parse_or_help(int argc, const char* const argv[], const po::options_description& desc,
-                   const po::positional_options_description* positional, po::variables_map& vm,
-                   const std::string& usage_line) {
-  try {
-    po::command_line_parser parser(argc, argv);
-    parser.options(desc);
-    if (positional) parser.positional(*positional);
-    po::store(parser.run(), vm);
-    if (vm.count("help")) {
-      std::cout << usage_line << "\n\n" << desc << "\n";
-      return false;
-    }
-    po::notify(vm);
-  } catch (const po::error& e) {
-    throw UsageError(std::string(e.what()) + " (see --help)");
-  }
-  return true;
 }
 
 void check_particles(long particles) {
@@ -245,8 +227,10 @@ std::vector<double> parse_positions(const std::string& text) {
 
 void SiteChoice::add_to(po::options_description& desc) {
   desc.add_options()
-      ("sites", po::value(&manifest_path), "a site manifest; with --site, at that site (its road and sensors)")
-      ("site", po::value(&site_name),
+      ("sites", po::value(&manifest_path)->value_name("MANIFEST"),
+       "a site manifest; with --site, at that site (its road and sensors from the manifest, in place of --road and "
+       "--sensors)")
+      ("site", po::value(&site_name)->value_name("NAME"),
        "the manifest's site: a posterior of several sites (fit --sites) then gives that site's own traffic");
 }
 

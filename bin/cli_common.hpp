@@ -21,6 +21,14 @@ namespace ssrfleet::cli {
 
 namespace po = boost::program_options;
 
+// --help's words for the options every command shares.
+inline constexpr const char* kRoadHelp =
+    "the road: preset AS1, AS2 or AS3, or a road file (a road CSV or an OpenCRG .crg surface; the kind is read from "
+    "the file's content)";
+inline constexpr const char* kPosteriorHelp =
+    "the posterior: a file that fit writes (or diagnose --posterior-out), or a stream's state directory (its "
+    "posterior.json)";
+
 // Options that define a site: --envelopment, --sensors, --m1, --cb, --ct.
 struct SiteFlags {
   double envelopment_m = 0.3;
@@ -34,18 +42,31 @@ struct SiteFlags {
   site::SiteOptions to_options() const;  // UsageError on a malformed --sensors
 };
 
-// Parses argv with desc (and positional names), turning program_options errors into
-// UsageError. Returns false if --help was given (help already printed to stdout).
+// Parses argv (argv[0] the command's name) with desc (and positional names), turning
+// program_options errors into UsageError. Returns false if --help was given, after printing the
+// command's help to stdout (help_format.hpp): `usage` holds the synopses, one a line, each
+// starting "ssrfleet COMMAND"; the command's summary (command_table.hpp) and then `about`, if
+// any, come before the options.
 bool parse_or_help(int argc, const char* const argv[], const po::options_description& desc,
                    const po::positional_options_description* positional, po::variables_map& vm,
-                   const std::string& usage_line);
+                   const std::string& usage, const std::string& about = "");
+
+// An option that a command does not take although users may expect it to (another command's, or
+// an earlier spelling): given anyway, it is a UsageError that names what to give instead, rather
+// than program_options' "unrecognised option" or, worse, its guess of a longer option that the
+// name begins (--posterior for --posterior-out).
+struct RefusedOption {
+  std::string name;     // "--state"
+  std::string instead;  // "give the state directory with --posterior DIR"
+};
+void refuse_options(int argc, const char* const argv[], const std::vector<RefusedOption>& refused);
 
 // A number as --help should show its default: the shortest text that reads back to it ("0.3",
 // where program_options' own conversion prints "0.29999999999999999").
 std::string shortest_text(double value);
 
 // --particles P: UsageError unless 2 <= P <= smc::TemperedSampler::kMaxParticles (1e7),
-// checked before the road is built so that an absurd count fails at once (README "Input limits").
+// checked before the road is built so that an absurd count fails at once (docs/site-data.md).
 void check_particles(long particles);
 
 // Parses a seed: a whole number in [0, 2^64). Anything else is a UsageError naming the option.

@@ -1,4 +1,4 @@
-// ssrfleet damage: where the fleet damages the pavement (issue 18 item 1). From a posterior file or
+// ssrfleet damage: where the fleet damages the pavement. From a posterior file or
 // a stream's state directory: the damage amplification a_n = E[IF^n] (n = 1, 4, any further n),
 // the DLC, hot spots and the expected damage per million trucks in equivalent standard axles, at
 // the sensors or any positions; CSV, and a PNG along the road when asked.
@@ -69,7 +69,7 @@ void print_summary(std::ostream& os, const records::DamageProfile& p) {
 }  // namespace
 
 int run_damage(int argc, const char* const argv[]) {
-  std::string posterior_path, state_dir, road = "AS1", out = "-", positions, seed_text = "1", png, class_label, mix_text;
+  std::string posterior_path, road = "AS1", out = "-", positions, seed_text = "1", png, class_label, mix_text;
   std::vector<double> extra_powers;
   bool new_road = false, quiet = false, fixed_traffic = false;
   damage::DamageOptions options;
@@ -78,41 +78,41 @@ int run_damage(int argc, const char* const argv[]) {
   po::options_description desc("damage options");
   desc.add_options()
       ("help,h", "show this help")
-      ("posterior", po::value(&posterior_path), "posterior file from fit")
-      ("state", po::value(&state_dir), "or a stream's state directory (its posterior.json)")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3 or a road CSV file")
-      ("new-road", po::bool_switch(&new_road), "on a site other than the fitted one")
-      ("positions", po::value(&positions), "where: list 'a,b,c' or FIRST:STEP:LAST (default: the sensors)")
-      ("power", po::value(&extra_powers)->multitoken()->composing(),
+      ("posterior", po::value(&posterior_path)->value_name("PATH")->required(), kPosteriorHelp)
+      ("road", po::value(&road)->value_name("ROAD")->default_value(road), kRoadHelp)
+      ("new-road", po::bool_switch(&new_road), "on a site other than the fitted one (another road or sensor array)")
+      ("positions", po::value(&positions)->value_name("LIST"),
+       "where: positions along the road (m) as a list 'a,b,c' or FIRST:STEP:LAST (default: the sensors)")
+      ("power", po::value(&extra_powers)->value_name("N")->multitoken()->composing(),
        "further powers n of the weighted aggregate force, beyond 1 and 4 (e.g. --power 2 6)")
-      ("threshold", po::value(&options.hot_spot_threshold)->default_value(options.hot_spot_threshold, "1.1"),
+      ("threshold", po::value(&options.hot_spot_threshold)->value_name("X")->default_value(options.hot_spot_threshold, "1.1"),
        "hot spot: the 95th percentile of a4 over the posterior above this multiple of the static value")
-      ("draws", po::value(&options.theta_draws)->default_value(options.theta_draws), "posterior draws of theta")
-      ("trucks-per-draw", po::value(&options.trucks_per_draw)->default_value(options.trucks_per_draw),
+      ("draws", po::value(&options.theta_draws)->value_name("N")->default_value(options.theta_draws), "posterior draws of theta")
+      ("trucks-per-draw", po::value(&options.trucks_per_draw)->value_name("N")->default_value(options.trucks_per_draw),
        "simulated trucks per theta draw (a Latin hypercube over the observed truck, k, k_t, z)")
       ("fixed-traffic", po::bool_switch(&fixed_traffic),
        "the observed trucks' speeds and masses as the traffic itself (default: a Bayesian bootstrap of them)")
-      ("class", po::value(&class_label), "a posterior of vehicle classes: this class alone")
-      ("mix", po::value(&mix_text),
+      ("class", po::value(&class_label)->value_name("LABEL"), "a posterior of vehicle classes: this class alone")
+      ("mix", po::value(&mix_text)->value_name("SHARES"),
        "a posterior of vehicle classes: combine them in these traffic shares, e.g. A=0.7,B=0.3 (each >= 0, summing to "
        "1; a class left out has share 0; default: each class's observed share)")
-      ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
-      ("out,o", po::value(&out)->default_value(out), "damage CSV to write ('-' = standard output)")
-      ("png", po::value(&png), "also plot a4 (with its 95 % limits), a1 and the hot spots along the road here (gnuplot)")
+      ("seed", po::value(&seed_text)->value_name("SEED")->default_value(seed_text), "random seed (a whole number)")
+      ("out,o", po::value(&out)->value_name("FILE")->default_value(out), "damage CSV to write ('-' = standard output)")
+      ("png", po::value(&png)->value_name("FILE"),
+       "also plot a4 (with its 95 % limits), a1 and the hot spots along the road here (gnuplot; FILE ends in .png)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   where.add_to(desc);
   site_flags.add_to(desc);
+  refuse_options(argc, argv, {{"--state", "give a stream's state directory with --posterior DIR"}});
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, nullptr, vm,
-                     "usage: ssrfleet damage --posterior FILE | --state DIR [--road AS1|FILE] [--positions ...] "
-                     "[--power N ...] [--threshold 1.1] [--out FILE] [--png FILE]")) {
+                     "ssrfleet damage --posterior PATH [--road ROAD | --sites MANIFEST --site NAME] [--positions LIST] "
+                     "[--power N ...] [--threshold X] [--out FILE] [--png FILE]",
+                     "The summary (expected damage per million trucks, hot spots) goes to standard output, or to "
+                     "standard error when the CSV does.")) {
     return 0;
   }
-  if (posterior_path.empty() == state_dir.empty()) throw UsageError("give one of --posterior FILE or --state DIR");
-  if (!state_dir.empty() && !std::filesystem::is_directory(state_dir)) {
-    throw MissingInputError("--state '" + state_dir + "' is not a directory (a stream's state directory)");
-  }
-  const std::string source = posterior_path.empty() ? state_dir : posterior_path;
+  const std::string& source = posterior_path;
   options.extra_powers = extra_powers;
   options.seed = parse_seed(seed_text);
   options.traffic_bootstrap = !fixed_traffic;

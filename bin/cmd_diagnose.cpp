@@ -24,45 +24,57 @@ int run_diagnose(int argc, const char* const argv[]) {
   int threads = 0;
   bool quiet = false, no_plots = false, refit_from_prior = false;
   SiteFlags site_flags;
+  // The families of posterior predictive checks the verdict divides alpha among.
+  const int kCheckFamilies = static_cast<int>(fleet::CheckKind::kCount);
   std::string catalogue;
   for (const auto& name : fleet::extension_names()) {
-    if (!catalogue.empty()) catalogue += ",";
+    if (!catalogue.empty()) catalogue += ", ";
     catalogue += name;
   }
   po::options_description desc("diagnose options");
   desc.add_options()
       ("help,h", "show this help")
-      ("log", po::value(&log_path)->required(), "WIM log (CSV) to diagnose")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
-      ("json", po::value(&json_path), "write the JSON report here ('-' = standard output)")
-      ("out,o", po::value(&out_dir), "folder for the report, per-sensor CSVs, plots and posterior.json (the posterior it ends with)")
-      ("posterior", po::value(&posterior_path),
-       "write the posterior diagnose ends with (the chosen effect's model, or the base model) here, ready for predict")
-      ("particles", po::value(&o.particles)->default_value(o.particles), "SMC particles per fit (>= 2)")
-      ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
-      ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
-      ("alpha", po::value(&o.alpha)->default_value(o.alpha), "a check fails when its predictive p-value is below this")
-      ("min-log-bf", po::value(&o.min_log_bayes_factor)->default_value(o.min_log_bayes_factor),
+      ("log", po::value(&log_path)->value_name("FILE")->required(), "WIM log (CSV) to diagnose (positional: LOG)")
+      ("road", po::value(&road)->value_name("ROAD")->default_value(road), kRoadHelp)
+      ("json", po::value(&json_path)->value_name("FILE"), "write the JSON report here ('-' = standard output)")
+      ("out,o", po::value(&out_dir)->value_name("DIR"),
+       "folder for the report, per-sensor CSVs, plots and posterior.json (the posterior it ends with)")
+      ("posterior-out", po::value(&posterior_path)->value_name("FILE"),
+       "write the posterior diagnose ends with (the chosen effect's model, or the base model) here, ready for predict "
+       "--posterior")
+      ("particles", po::value(&o.particles)->value_name("N")->default_value(o.particles), "SMC particles per fit (>= 2)")
+      ("threads", po::value(&threads)->value_name("N")->default_value(threads),
+       "worker threads; 0 = all cores (results do not depend on it)")
+      ("seed", po::value(&seed_text)->value_name("SEED")->default_value(seed_text), "random seed (a whole number)")
+      ("alpha", po::value(&o.alpha)->value_name("X")->default_value(o.alpha),
+       ("a check is flagged when its predictive p-value is below alpha; the verdict that a misfit remains (and the "
+        "search for a further effect) needs a check below alpha / " + std::to_string(kCheckFamilies) +
+        ", one share for each of the " + std::to_string(kCheckFamilies) + " check families (Bonferroni)").c_str())
+      ("min-log-bf", po::value(&o.min_log_bayes_factor)->value_name("X")->default_value(o.min_log_bayes_factor),
        "log Bayes factor an effect needs against the base model")
-      ("holdout", po::value(&o.holdout_fraction)->default_value(o.holdout_fraction),
+      ("holdout", po::value(&o.holdout_fraction)->value_name("X")->default_value(o.holdout_fraction),
        "share of the trucks (the last ones) that score held-out skill")
-      ("candidates", po::value(&candidates), ("extensions to consider, comma-separated (default: all of " + catalogue + ")").c_str())
-      ("max-effects", po::value(&o.max_effects)->default_value(o.max_effects),
+      ("candidates", po::value(&candidates)->value_name("LIST"),
+       ("effects to consider, comma-separated (default: all of them: " + catalogue + "; ssrfleet effects describes them)").c_str())
+      ("max-effects", po::value(&o.max_effects)->value_name("N")->default_value(o.max_effects),
        "effects added at most: after each, diagnose checks again and looks for the next while a check fails")
       ("shortlist-only", po::bool_switch(&o.shortlist_only),
        "refit only candidates that a failed check points at (faster; misses effects the checks cannot see)")
       ("refit-from-prior", po::bool_switch(&refit_from_prior),
        "refit candidates drawing each new truck from the fleet prior, not from its table in the base fit "
-       "(the older, slower path; for comparison)")
-      ("draws", po::value(&o.draws)->default_value(o.draws), "posterior draws behind the checks")
+       "(slower; for comparison)")
+      ("draws", po::value(&o.draws)->value_name("N")->default_value(o.draws), "posterior draws behind the checks")
       ("no-plots", po::bool_switch(&no_plots), "write the gnuplot scripts but do not run gnuplot")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   site_flags.add_to(desc);
   po::positional_options_description positional;
   positional.add("log", 1);
+  refuse_options(argc, argv, {{"--posterior", "the posterior diagnose ends with is an output: --posterior-out FILE"}});
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, &positional, vm,
-                     "usage: ssrfleet diagnose LOG [--road AS1|FILE] [--json report.json] [--out DIR] [--particles P]")) {
+                     "ssrfleet diagnose LOG [--road ROAD] [--json FILE] [--out DIR] [--posterior-out FILE] "
+                     "[--particles N] [--candidates LIST]",
+                     "The verdict and each candidate effect's evidence go to standard output (unless --json -).")) {
     return 0;
   }
   check_particles(o.particles);

@@ -29,23 +29,25 @@ int run_fit(int argc, const char* const argv[]) {
   po::options_description desc("fit options");
   desc.add_options()
       ("help,h", "show this help")
-      ("log", po::value(&log_path), "WIM log (CSV) to replay")
-      ("sites", po::value(&manifest_path),
+      ("log", po::value(&log_path)->value_name("FILE"), "WIM log (CSV) to replay (positional: LOG)")
+      ("sites", po::value(&manifest_path)->value_name("MANIFEST"),
        "a site manifest (JSON: each site's name, road, sensors and log): one fleet posterior from all its sites; "
        "with --site, fit that site alone")
-      ("site", po::value(&site_name), "the manifest's site to fit (its log, road and sensors from the manifest)")
+      ("site", po::value(&site_name)->value_name("NAME"),
+       "the manifest's site to fit (its log, road and sensors from the manifest)")
       ("calibrate", po::bool_switch(&calibrate),
-       "with --sites: fit each site's sensor gains beside the fleet (Monte Carlo EM from the manifest's calibration; "
-       "README \"Sensor calibration\")")
-      ("calibration-rounds", po::value(&calibration_rounds)->default_value(calibration_rounds),
+       "with --sites: fit each site's sensor gains beside the fleet (Monte Carlo EM, starting from the manifest's "
+       "calibration)")
+      ("calibration-rounds", po::value(&calibration_rounds)->value_name("N")->default_value(calibration_rounds),
        "with --calibrate: the most fits the EM runs (it stops when no gain moves by 0.3 of its standard error)")
-      ("write-manifest", po::value(&calibrated_manifest),
+      ("write-manifest", po::value(&calibrated_manifest)->value_name("FILE"),
        "with --calibrate: write the manifest again with each site's fitted gains as its calibration (paths made "
        "absolute), for stream --sites")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
-      ("out,o", po::value(&out)->default_value(out), "posterior file to write (JSON)")
-      ("method", po::value(&method)->default_value(method), "smc (sequential, default) or mcmc (the paper's batch baseline)")
-      ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
+      ("road", po::value(&road)->value_name("ROAD")->default_value(road), kRoadHelp)
+      ("out,o", po::value(&out)->value_name("FILE")->default_value(out), "posterior file to write (JSON; '-' = standard output)")
+      ("method", po::value(&method)->value_name("METHOD")->default_value(method),
+       "smc (sequential, default) or mcmc (the paper's batch baseline)")
+      ("seed", po::value(&seed_text)->value_name("SEED")->default_value(seed_text), "random seed (a whole number)")
       ("fhwa-classes", po::bool_switch(&fhwa),
        "the log's class column must hold FHWA vehicle classes 1..13 (otherwise any label of A-Z a-z 0-9 _ . -)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
@@ -55,8 +57,10 @@ int run_fit(int argc, const char* const argv[]) {
   positional.add("log", 1);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, &positional, vm,
-                     "usage: ssrfleet fit LOG [--road AS1|FILE] [--model SPEC] [--out posterior.json] [--particles P] [--seed K]\n"
-                     "       ssrfleet fit --sites MANIFEST [--site NAME] [...]")) {
+                     "ssrfleet fit LOG [--road ROAD] [--model SPEC] [--out FILE] [--particles N] [--seed SEED]\n"
+                     "ssrfleet fit --sites MANIFEST [--site NAME] [--calibrate] [--out FILE] [...]",
+                     "A log with a class column gets one posterior per vehicle class, all in the one file. The model "
+                     "spec and the effects it can name: ssrfleet effects.")) {
     return 0;
   }
   check_particles(fit.particles);

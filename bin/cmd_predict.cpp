@@ -25,28 +25,32 @@ int run_predict(int argc, const char* const argv[]) {
   po::options_description desc("predict options");
   desc.add_options()
       ("help,h", "show this help")
-      ("posterior", po::value(&posterior_path)->required(), "posterior file from fit, or a stream's state directory")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
+      ("posterior", po::value(&posterior_path)->value_name("PATH")->required(), kPosteriorHelp)
+      ("road", po::value(&road)->value_name("ROAD")->default_value(road), kRoadHelp)
       ("new-road", po::bool_switch(&new_road), "predict on a site other than the fitted one (paper Fig. 9)")
-      ("positions", po::value(&positions), "where to predict: list 'a,b,c' or FIRST:STEP:LAST (default: the sensors)")
-      ("draws", po::value(&options.theta_draws)->default_value(options.theta_draws), "posterior draws of theta")
-      ("trucks-per-draw", po::value(&options.trucks_per_draw)->default_value(options.trucks_per_draw),
+      ("positions", po::value(&positions)->value_name("LIST"),
+       "where to predict: positions along the road (m) as a list 'a,b,c' or FIRST:STEP:LAST (default: the sensors)")
+      ("draws", po::value(&options.theta_draws)->value_name("N")->default_value(options.theta_draws),
+       "posterior draws of theta")
+      ("trucks-per-draw", po::value(&options.trucks_per_draw)->value_name("N")->default_value(options.trucks_per_draw),
        "simulated trucks per theta draw (stratified: a Latin hypercube over the observed truck, k, k_t, z)")
       ("fixed-traffic", po::bool_switch(&fixed_traffic),
        "take the observed trucks' speeds and masses as the traffic itself: the band of the mean then shows "
        "theta's uncertainty only (default: a Bayesian bootstrap of them adds the uncertainty of the traffic mix)")
-      ("class", po::value(&class_label), "a posterior of vehicle classes: predict this class alone")
-      ("mix", po::value(&mix_text),
+      ("class", po::value(&class_label)->value_name("LABEL"), "a posterior of vehicle classes: predict this class alone")
+      ("mix", po::value(&mix_text)->value_name("SHARES"),
        "a posterior of vehicle classes: combine them in these traffic shares, e.g. A=0.7,B=0.3 (each >= 0, summing to "
        "1; a class left out has share 0; default: each class's observed share)")
-      ("seed", po::value(&seed_text)->default_value(seed_text), "random seed")
-      ("out,o", po::value(&out)->default_value(out), "prediction CSV to write ('-' = standard output)")
+      ("seed", po::value(&seed_text)->value_name("SEED")->default_value(seed_text), "random seed (a whole number)")
+      ("out,o", po::value(&out)->value_name("FILE")->default_value(out), "prediction CSV to write ('-' = standard output)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   where.add_to(desc);
   site_flags.add_to(desc);
+  refuse_options(argc, argv, {{"--state", "give a stream's state directory with --posterior DIR"}});
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, nullptr, vm,
-                     "usage: ssrfleet predict --posterior FILE [--road AS1|FILE | --sites MANIFEST --site NAME] [--positions ...] [--out FILE]")) {
+                     "ssrfleet predict --posterior PATH [--road ROAD | --sites MANIFEST --site NAME] [--new-road] "
+                     "[--positions LIST] [--out FILE]")) {
     return 0;
   }
   options.seed = parse_seed(seed_text);

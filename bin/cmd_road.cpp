@@ -122,24 +122,28 @@ int run_road(int argc, const char* const argv[]) {
   po::options_description desc("road options");
   desc.add_options()
       ("help,h", "show this help")
-      ("road", po::value(&spec)->required(),
-       "preset AS1|AS2|AS3, a road CSV, an OpenCRG (.crg) surface or an ERD profile file (positional)")
-      ("write,w", po::value(&write_path), "write the surface to this file: OpenCRG if it ends in .crg, else a road CSV")
-      ("crg-format", po::value(&crg_format_text)->default_value(crg_format_text),
+      ("road", po::value(&spec)->value_name("ROAD")->required(),
+       "preset AS1, AS2 or AS3, a road CSV, an OpenCRG (.crg) surface or an ERD profile file (positional: ROAD)")
+      ("write,w", po::value(&write_path)->value_name("FILE"),
+       "write the surface to this file: OpenCRG if it ends in .crg, else a road CSV")
+      ("crg-format", po::value(&crg_format_text)->value_name("TYPE")->default_value(crg_format_text),
        "OpenCRG data type for --write: KDBI (binary double, exact), KRBI, LDFI or LRFI")
-      ("erd", po::value(&erd_path), "write the wheel paths' longitudinal profiles to this ERD file")
-      ("wheel-paths", po::value(&wheel_paths_text),
-       "lateral positions (m) of the wheel paths, comma-separated (default: the surface's centre -/+ 0.9 m)")
-      ("classes", po::value(&classes)->default_value(classes),
+      ("erd", po::value(&erd_path)->value_name("FILE"), "write the wheel paths' longitudinal profiles to this ERD file")
+      ("wheel-paths", po::value(&wheel_paths_text)->value_name("Z,Z,..."),
+       "lateral positions (m) of the wheel paths, comma-separated (default: the surface's centre -/+ 0.9 m, or its "
+       "centre alone on a surface narrower than 1.8 m)")
+      ("classes", po::value(&classes)->value_name("TABLE")->default_value(classes),
        "roughness class table: iso8608 (ISO 8608:1995) or paper (the ISO draft of 1982 the paper's labels follow)")
       ("json", po::bool_switch(&json), "print the summary as JSON instead of text")
-      ("iri-step", po::value(&iri_step_m)->default_value(iri_step_m), "lateral spacing of the IRI positions (m)");
+      ("iri-step", po::value(&iri_step_m)->value_name("DZ")->default_value(iri_step_m),
+       "lateral spacing of the IRI positions (m)");
   po::positional_options_description positional;
   positional.add("road", 1);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, &positional, vm,
-                     "usage: ssrfleet road AS1|AS2|AS3|FILE [--write FILE.csv|FILE.crg] [--erd FILE] [--wheel-paths Z,...] "
-                     "[--json]")) {
+                     "ssrfleet road ROAD [--write FILE] [--erd FILE] [--wheel-paths Z,Z,...] [--json]",
+                     "The summary (size, spacing, missing cells, RMS height, the fitted roughness and its class, the "
+                     "IRI of the wheel paths and across the width) goes to standard output.")) {
     return 0;
   }
   if (!(iri_step_m > 0.0)) throw UsageError("--iri-step must be positive");

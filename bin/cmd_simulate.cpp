@@ -40,7 +40,7 @@ std::vector<records::ForceRecord> to_force_records(const std::vector<records::Wi
   return out;
 }
 
-// The most trucks simulate draws (README "Input limits"): the log of 10 million trucks is about 3 GB
+// The most trucks simulate draws (docs/site-data.md): the log of 10 million trucks is about 3 GB
 // in memory while it is written.
 constexpr long kMaxSimulatedTrucks = 10'000'000;
 
@@ -112,48 +112,53 @@ int run_simulate(int argc, const char* const argv[]) {
   po::options_description desc("simulate options");
   desc.add_options()
       ("help,h", "show this help")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
-      ("trucks", po::value(&trucks_arg)->default_value(trucks_arg),
+      ("road", po::value(&road)->value_name("ROAD")->default_value(road), kRoadHelp)
+      ("trucks", po::value(&trucks_arg)->value_name("N|FILE")->default_value(trucks_arg),
        "number of trucks to draw from the fleet distribution, or a truck-list CSV file")
-      ("noise", po::value(&noise)->default_value(noise), "measurement noise sd sigma_IF; 0 = exact model output")
-      ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (fleet draw and noise)")
-      ("out,o", po::value(&out)->default_value(out), "WIM log to write ('-' = standard output)")
-      ("truth", po::value(&truth), "also write the simulated trucks as they drove (truck-list CSV; with second_class, its stiffnesses) here")
-      ("model", po::value(&effect),
+      ("noise", po::value(&noise)->value_name("SD")->default_value(noise), "measurement noise sd sigma_IF; 0 = exact model output")
+      ("seed", po::value(&seed_text)->value_name("SEED")->default_value(seed_text),
+       "random seed (fleet draw and noise; a whole number)")
+      ("out,o", po::value(&out)->value_name("FILE")->default_value(out), "WIM log to write ('-' = standard output)")
+      ("truth", po::value(&truth)->value_name("FILE"),
+       "also write the simulated trucks as they drove (truck-list CSV; with second_class, its stiffnesses) here")
+      ("model", po::value(&effect)->value_name("SPEC"),
        "simulate with effects the base model leaves out: effects joined by '+', each NAME:param=value,... with every "
-       "parameter given (e.g. sensor_gain:sensor=5,gain=1.05+tyre_damping:c_t=400; see `ssrfleet diagnose --help` for "
-       "the catalogue)")
-      ("effect", po::value(&effect), "the same as --model (one effect or several joined by '+')")
+       "parameter given, e.g. sensor_gain:sensor=5,gain=1.05+tyre_damping:c_t=400 (ssrfleet effects lists them)")
+      ("effect", po::value(&effect)->value_name("SPEC"), "the same as --model (one effect or several joined by '+')")
       ("forces", po::bool_switch(&forces),
        "log raw tyre forces force_1..force_M (N) instead of impact factors: a log for `ssrfleet weigh`")
       ("no-sprung-mass", po::bool_switch(&no_sprung_mass),
        "with --forces, leave the sprung_mass_kg column out (the static weight is what weigh estimates)")
-      ("fleet-mix", po::value(&fleet_mix),
-       "a fleet of vehicle classes: \"A:share=0.6,k-mean=400e3;B:share=0.4,k-mean=600e3\" (each class's traffic share, "
-       "summing to 1, and the fleet parameters below it changes, e.g. k-mean, m2-sd); each truck's class is drawn by "
-       "share and written in the log's class column (and the truth list's)")
-      ("static-weights", po::value(&static_weights),
+      ("fleet-mix", po::value(&fleet_mix)->value_name("MIX"),
+       "a fleet of vehicle classes, e.g. \"A:share=0.6,k-mean=400e3;B:share=0.4,k-mean=600e3\": each class's traffic "
+       "share (the shares summing to 1) and the fleet parameters below that it changes (k-mean, m2-sd, ...); each "
+       "truck's class is drawn by share and written in the log's class column (and the truth list's)")
+      ("static-weights", po::value(&static_weights)->value_name("FILE"),
        "also write each truck's true static wheel load here (truck_id,static_kn,sprung_mass_kg)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   site_flags.add_to(desc);
-  po::options_description fleet_desc("fleet distribution (paper Table 1 defaults)");
-  const auto number = [](double& value) { return po::value(&value)->default_value(value, shortest_text(value)); };
+  po::options_description fleet_desc("Fleet distribution (paper Table 1)");
+  const auto number = [](double& value, const char* name) {
+    return po::value(&value)->value_name(name)->default_value(value, shortest_text(value));
+  };
   fleet_desc.add_options()
-      ("m2-mean", number(dist.sprung_mass_kg.mean), "sprung mass mean (kg)")
-      ("m2-sd", number(dist.sprung_mass_kg.sd), "sprung mass sd (kg)")
-      ("k-mean", number(dist.stiffness_npm.mean), "suspension stiffness mean (N/m)")
-      ("k-sd", number(dist.stiffness_npm.sd), "suspension stiffness sd (N/m)")
-      ("kt-mean", number(dist.tyre_stiffness_npm.mean), "tyre stiffness mean (N/m)")
-      ("kt-sd", number(dist.tyre_stiffness_npm.sd), "tyre stiffness sd (N/m)")
-      ("speed-mean", number(dist.speed_mps.mean), "speed mean (m/s)")
-      ("speed-sd", number(dist.speed_mps.sd), "speed sd (m/s)")
-      ("z-mean", number(dist.lateral_m.mean), "lateral position mean (m)")
-      ("z-sd", number(dist.lateral_m.sd), "lateral position sd (m)");
+      ("m2-mean", number(dist.sprung_mass_kg.mean, "KG"), "sprung mass mean (kg)")
+      ("m2-sd", number(dist.sprung_mass_kg.sd, "KG"), "sprung mass sd (kg)")
+      ("k-mean", number(dist.stiffness_npm.mean, "N/M"), "suspension stiffness mean (N/m)")
+      ("k-sd", number(dist.stiffness_npm.sd, "N/M"), "suspension stiffness sd (N/m)")
+      ("kt-mean", number(dist.tyre_stiffness_npm.mean, "N/M"), "tyre stiffness mean (N/m)")
+      ("kt-sd", number(dist.tyre_stiffness_npm.sd, "N/M"), "tyre stiffness sd (N/m)")
+      ("speed-mean", number(dist.speed_mps.mean, "M/S"), "speed mean (m/s)")
+      ("speed-sd", number(dist.speed_mps.sd, "M/S"), "speed sd (m/s)")
+      ("z-mean", number(dist.lateral_m.mean, "M"), "lateral position mean (m)")
+      ("z-sd", number(dist.lateral_m.sd, "M"), "lateral position sd (m)");
   desc.add(fleet_desc);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, nullptr, vm,
-                     "usage: ssrfleet simulate [--road AS1|FILE] [--trucks N|FILE] [--noise S] [--seed K] [--out FILE]\n"
-                     "       [--forces [--no-sprung-mass]] [--static-weights FILE]")) {
+                     "ssrfleet simulate [--road ROAD] [--trucks N|FILE] [--noise SD] [--seed SEED] [--model SPEC] "
+                     "[--out FILE]\n"
+                     "ssrfleet simulate --forces [--no-sprung-mass] [--static-weights FILE] [...]",
+                     "The log starts with a comment line naming the road, trucks, noise, seed, site and model.")) {
     return 0;
   }
   const std::uint64_t seed = parse_seed(seed_text);

@@ -80,27 +80,36 @@ int run_sites(int argc, const char* const argv[]) {
   po::options_description desc("sites options");
   desc.add_options()
       ("help,h", "show this help")
-      ("manifest", po::value(&manifest_path)->required(), "the site manifest (JSON)")
+      ("manifest", po::value(&manifest_path)->value_name("MANIFEST")->required(),
+       "the site manifest (JSON; positional: MANIFEST)")
       ("names", po::bool_switch(&names), "print the sites' names, one per line, and nothing else (for scripts)")
-      ("collect", po::value(&collect_dir),
-       "read each site's posterior DIR/NAME.json (fit alone) and write their summaries as one CSV table")
+      ("collect", po::value(&collect_dir)->value_name("DIR"),
+       "read each site's posterior DIR/NAME.json (fit --sites MANIFEST --site NAME) and write their summaries as one "
+       "CSV table")
       ("check", po::bool_switch(&check),
        "flag a site whose fleet differs from the other sites': fits each site alone and the others without it, "
        "and compares their stiffness hyperparameters (a conflict p-value per site)")
-      ("particles", po::value(&check_flags.particles)->default_value(check_flags.particles), "--check: particles per fit")
-      ("threads", po::value(&check_flags.threads)->default_value(check_flags.threads), "--check: worker threads (0 = all cores)")
-      ("seed", po::value(&seed_text)->default_value(seed_text), "--check: random seed")
-      ("alpha", po::value(&check_flags.alpha)->default_value(check_flags.alpha, "0.01"),
+      ("particles", po::value(&check_flags.particles)->value_name("N")->default_value(check_flags.particles),
+       "--check: particles per fit")
+      ("threads", po::value(&check_flags.threads)->value_name("N")->default_value(check_flags.threads),
+       "--check: worker threads (0 = all cores)")
+      ("seed", po::value(&seed_text)->value_name("SEED")->default_value(seed_text), "--check: random seed")
+      ("alpha", po::value(&check_flags.alpha)->value_name("X")->default_value(check_flags.alpha, "0.01"),
        "--check: family-wise level; a site is flagged at p < alpha / sites")
-      ("out,o", po::value(&out)->default_value(out), "where the table goes ('-' = standard output)")
-      ("quiet,q", po::bool_switch(&quiet), "no warnings about the roads on standard error");
+      ("out,o", po::value(&out)->value_name("FILE")->default_value(out), "where the table goes ('-' = standard output)")
+      ("quiet,q", po::bool_switch(&quiet),
+       "print no warnings about the sites' roads and, with --check, no progress on standard error (errors and "
+       "--check's verdict are still printed)");
   flags.add_to(desc, /*with_sensors=*/false);
   po::positional_options_description positional;
   positional.add("manifest", 1);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, &positional, vm,
-                     "usage: ssrfleet sites MANIFEST [--names | --collect DIR | --check] [--out FILE]\n"
-                     "  without --names or --collect: checks every site (road, sensors, log) and lists them")) {
+                     "ssrfleet sites MANIFEST [--names | --collect DIR | --check] [--out FILE]",
+                     "Without --names, --collect or --check: checks every site (its road covers its sensors, its log "
+                     "reads whole with the site's sensor count) and lists them as CSV (site, road, sensors, trucks, "
+                     "log). --check writes one row per site (its conflict p-value, the hyperparameters alone and from "
+                     "the other sites) and names a flagged site on standard error.")) {
     return 0;
   }
   if (int(names) + int(!collect_dir.empty()) + int(check) > 1) throw UsageError("give one of --names, --collect and --check");

@@ -47,28 +47,37 @@ int run_stream(int argc, const char* const argv[]) {
   po::options_description desc("stream options");
   desc.add_options()
       ("help,h", "show this help")
-      ("road", po::value(&road)->default_value(road), "road surface: preset AS1|AS2|AS3, a road CSV or an OpenCRG (.crg) file")
-      ("sites", po::value(&manifest_path),
+      ("road", po::value(&road)->value_name("ROAD")->default_value(road), kRoadHelp)
+      ("sites", po::value(&manifest_path)->value_name("MANIFEST"),
        "a site manifest: one fleet from all its sites; the input's `site` column names each record's site, a record "
        "fills its site's first M value columns (the manifest's logs are not read and may be left out)")
-      ("state", po::value(&options.state_dir)->required(), "state directory (checkpoint, posterior.json, rejects.csv)")
-      ("input,i", po::value(&input)->default_value(input), "WIM log to read ('-' = standard input)")
-      ("follow,f", po::bool_switch(&options.follow), "at the end of the input wait for more, like tail -f (stop with Ctrl-C)")
-      ("report-every", po::value(&options.report_every)->default_value(options.report_every),
+      ("state", po::value(&options.state_dir)->value_name("DIR")->required(),
+       "the stream's state directory (made if missing; an existing state is resumed): checkpoint.bin (what a resume "
+       "starts from), trucks.bin (the absorbed trucks; trucks.LABEL.bin per vehicle class), posterior.json (the "
+       "posterior that predict, damage and weigh read with --posterior DIR), history.sqlite (every checkpoint's "
+       "summaries and SSR prediction), rejects.csv (the quarantined records) and lock (held by the running stream)")
+      ("input,i", po::value(&input)->value_name("FILE")->default_value(input), "WIM log to read ('-' = standard input)")
+      ("follow,f", po::bool_switch(&options.follow),
+       "with --input FILE: at its end wait for more, like tail -f (stop with Ctrl-C or SIGTERM); standard input is "
+       "read until it closes")
+      ("report-every", po::value(&options.report_every)->value_name("N")->default_value(options.report_every),
        "print the SSR prediction every N trucks (0 = only at the end)")
-      ("particles", po::value(&particles)->default_value(particles), "number of particles P (>= 2)")
-      ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
-      ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (a resume must use the same one)")
-      ("model", po::value(&model_text)->default_value(model_text),
+      ("particles", po::value(&particles)->value_name("N")->default_value(particles), "number of particles P (>= 2)")
+      ("threads", po::value(&threads)->value_name("N")->default_value(threads),
+       "worker threads; 0 = all cores (results do not depend on it)")
+      ("seed", po::value(&seed_text)->value_name("SEED")->default_value(seed_text),
+       "random seed (a whole number; a resume must use the same one)")
+      ("model", po::value(&model_text)->value_name("SPEC")->default_value(model_text),
        "the model to fit: base, or effects joined by '+', each NAME or NAME:param=value,... (a parameter given is "
-       "fixed, one left out is fitted); effects run on the exact latent core; a resume must use the same model")
-      ("window", po::value(&options.fit.latent.window)->default_value(0),
-       "bounded memory on the latent core: keep and move only the last W trucks' latents, older ones as sufficient "
+       "fixed, one left out is fitted); effects run on the exact latent core; a resume must use the same model "
+       "(ssrfleet effects lists them)")
+      ("window", po::value(&options.fit.latent.window)->value_name("N")->default_value(0),
+       "bounded memory on the latent core: keep and move only the last N trucks' latents, older ones as sufficient "
        "statistics (0 = the default exact marginal core, whose memory per truck is a table of a few KB)")
       ("tables-in-memory", po::bool_switch(&options.tables_in_memory),
        "keep the marginal core's truck tables, the trucks' data and their ids in memory (about 5 KB a truck) instead of "
        "unnamed files in the state directory that the kernel pages, which keep the stream's own memory flat; same results")
-      ("classes", po::value(&classes_text),
+      ("classes", po::value(&classes_text)->value_name("LIST"),
        "fix the vehicle classes of a new state, e.g. A,B (default: each new label in the class column starts a class of "
        "its own); a record of another class is quarantined in rejects.csv (field class); a resume keeps the state's list")
       ("fhwa-classes", po::bool_switch(&options.limits.fhwa_classes),
@@ -77,7 +86,11 @@ int run_stream(int argc, const char* const argv[]) {
   site_flags.add_to(desc);
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, nullptr, vm,
-                     "usage: ssrfleet stream --state DIR [--road AS1|FILE | --sites MANIFEST] [--input FILE] [--follow] [--report-every N]")) {
+                     "ssrfleet stream --state DIR [--road ROAD | --sites MANIFEST] [--input FILE] [--follow] "
+                     "[--report-every N]",
+                     "The state is saved after every truck, so a stream that stops (Ctrl-C, SIGTERM, a crash) "
+                     "resumes where it stopped with the same command, to the same posterior bit for bit. A second "
+                     "stream on a state in use exits with status 75.")) {
     return 0;
   }
   check_particles(particles);

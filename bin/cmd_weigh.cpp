@@ -1,5 +1,5 @@
 // ssrfleet weigh: each truck's static wheel load from its raw tyre forces, corrected for the site's
-// SSR by the fleet posterior (issue 18 item 2; weigh/static_weight.hpp has the estimator, the
+// SSR by the fleet posterior (weigh/static_weight.hpp has the estimator, the
 // fixed point over the unknown sprung mass, and the interval).
 #include <iostream>
 #include <string>
@@ -27,29 +27,37 @@ int run_weigh(int argc, const char* const argv[]) {
   po::options_description desc("weigh options");
   desc.add_options()
       ("help,h", "show this help")
-      ("log", po::value(&log_path)->required(), "force log: truck_id, speed_mps, force_1..force_M (N); sprung_mass_kg optional, unused")
-      ("posterior", po::value(&posterior_path)->required(), "posterior file from fit, or a stream's state directory")
-      ("road", po::value(&road)->default_value(road), "road surface the posterior was fitted on: preset AS1|AS2|AS3 or a road CSV file")
-      ("draws", po::value(&options.prediction.theta_draws)->default_value(options.prediction.theta_draws),
+      ("log", po::value(&log_path)->value_name("FILE")->required(),
+       "force log (CSV; positional: FORCES): truck_id, time_s (optional), speed_mps, force_1..force_M (N, one per "
+       "sensor); a sprung_mass_kg column may be there and is not used")
+      ("posterior", po::value(&posterior_path)->value_name("PATH")->required(), kPosteriorHelp)
+      ("road", po::value(&road)->value_name("ROAD")->default_value(road),
+       "the road the posterior was fitted on: preset AS1, AS2 or AS3, or a road file (a road CSV or an OpenCRG .crg "
+       "surface; the kind is read from the file's content)")
+      ("draws", po::value(&options.prediction.theta_draws)->value_name("N")->default_value(options.prediction.theta_draws),
        "posterior draws of theta per predicted IF pattern")
-      ("trucks-per-draw", po::value(&options.prediction.trucks_per_draw)->default_value(options.prediction.trucks_per_draw),
+      ("trucks-per-draw",
+       po::value(&options.prediction.trucks_per_draw)->value_name("N")->default_value(options.prediction.trucks_per_draw),
        "simulated trucks per theta draw (their spread gives the IF covariance)")
-      ("tolerance", po::value(&options.relative_tolerance)->default_value(options.relative_tolerance, "1e-6"),
+      ("tolerance", po::value(&options.relative_tolerance)->value_name("X")->default_value(options.relative_tolerance, "1e-6"),
        "fixed point: stop when a step moves the estimate by less than this fraction")
-      ("max-iterations", po::value(&options.max_iterations)->default_value(options.max_iterations),
+      ("max-iterations", po::value(&options.max_iterations)->value_name("N")->default_value(options.max_iterations),
        "fixed point: give up (an error) after this many steps")
-      ("class", po::value(&class_label),
+      ("class", po::value(&class_label)->value_name("LABEL"),
        "a posterior of vehicle classes: weigh every truck as one of this class (needed when it holds several)")
-      ("seed", po::value(&seed_text)->default_value(seed_text), "random seed (the same draws for every truck and step)")
-      ("out,o", po::value(&out)->default_value(out), "weights CSV to write ('-' = standard output)")
+      ("seed", po::value(&seed_text)->value_name("SEED")->default_value(seed_text),
+       "random seed (a whole number; the same draws for every truck and step)")
+      ("out,o", po::value(&out)->value_name("FILE")->default_value(out), "weights CSV to write ('-' = standard output)")
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   where.add_to(desc);
   site_flags.add_to(desc);
   po::positional_options_description positional;
   positional.add("log", 1);
+  refuse_options(argc, argv, {{"--state", "give a stream's state directory with --posterior DIR"}});
   po::variables_map vm;
   if (!parse_or_help(argc, argv, desc, &positional, vm,
-                     "usage: ssrfleet weigh FORCES.csv --posterior FILE [--road AS1|FILE] [--out weights.csv]")) {
+                     "ssrfleet weigh FORCES --posterior PATH [--road ROAD | --sites MANIFEST --site NAME] [--out FILE]",
+                     "The road and the site options must be those the posterior was fitted with.")) {
     return 0;
   }
   options.prediction.seed = parse_seed(seed_text);
@@ -64,7 +72,7 @@ int run_weigh(int argc, const char* const argv[]) {
   const fleet::PosteriorCloud& cloud = classes.front().cloud;
   require_fitted_site(cloud, posterior_path, site, "; weigh needs the road and site options the posterior was fitted with");
   auto records = io::read_force_log_file(log_path, site.sensors(), "(--sensors " + site_flags.sensors + ")");
-  // A site whose sensors the fit calibrated (README "Sensor calibration"): its forces read gain x the
+  // A site whose sensors the fit calibrated (docs/sites.md): its forces read gain x the
   // true ones, which is divided out here as the fit divided it out of the impact factors. The gains
   // are the posterior's (the manifest's as the fit read them, or fitted); a manifest that calibrates
   // the site beside a posterior fitted without would correct the forces and not the fleet: refused.

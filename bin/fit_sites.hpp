@@ -1,5 +1,5 @@
-// `fit --sites MANIFEST` without --site: one fleet posterior from every site of a manifest (README
-// "Many sites"). Each site keeps its own road, sensor array and log; the fleet's hyperparameters
+// `fit --sites MANIFEST` without --site: one fleet posterior from every site of a manifest
+// (docs/sites.md). Each site keeps its own road, sensor array and log; the fleet's hyperparameters
 // are shared; the marginal core fits all the trucks at once, each through its own site.
 #pragma once
 
@@ -18,7 +18,7 @@ struct JointFitRequest {
   std::string method;  // only "smc" fits several sites
   std::uint64_t seed = 1;
   bool quiet = false;
-  // Fit each site's sensor gains beside the fleet (README "Sensor calibration"): Monte Carlo EM,
+  // Fit each site's sensor gains beside the fleet (docs/sites.md): Monte Carlo EM,
   // at most `calibration_rounds` fits, starting from the manifest's calibrations.
   bool calibrate = false;
   int calibration_rounds = discrepancy::CalibrationOptions{}.max_rounds;

@@ -23,38 +23,46 @@ namespace po = boost::program_options;
 void FitFlags::add_to(po::options_description& desc) {
   po::options_description smc("SMC options");
   smc.add_options()
-      ("model", po::value(&model)->default_value(model),
+      ("model", po::value(&model)->value_name("SPEC")->default_value(model),
        "the model to fit: base, or effects joined by '+', each NAME or NAME:param=value,... (a parameter given is "
        "fixed, one left out is fitted), e.g. tyre_damping+sensor_gain:sensor=11; effects need the latent core or "
-       "--method mcmc")
-      ("core", po::value(&core)->default_value(core),
+       "--method mcmc (ssrfleet effects lists them)")
+      ("core", po::value(&core)->value_name("CORE")->default_value(core),
        "inference core: marginal (each truck's latents integrated out in a table built on arrival; IBIS over the "
        "7 hyperparameters, cost per truck flat in n) or latent (every truck's latents in every particle; needed for "
        "--window; cost per truck grows with n)")
-      ("particles", po::value(&particles)->default_value(particles), "number of particles P (>= 2)")
-      ("threads", po::value(&threads)->default_value(threads), "worker threads; 0 = all cores (results do not depend on it)")
-      ("final-sweeps", po::value(&final_sweeps)->default_value(final_sweeps),
-       "MCMC sweeps after the last truck: the same posterior, less seed-to-seed error; the marginal core's posterior pools every sweep's cloud (latent core: 50 unless given, not pooled)")
-      ("cess", po::value(&cess_target)->default_value(cess_target, shortest_text(cess_target)), "conditional-ESS target of each tempering step, in (0, 1)")
-      ("max-sweeps", po::value(&max_sweeps)->default_value(max_sweeps), "MCMC sweeps per move phase at most (latent core: per tempering step, 5 unless given)")
-      ("older-sweeps", po::value(&older_sweeps)->default_value(older_sweeps),
+      ("particles", po::value(&particles)->value_name("N")->default_value(particles), "number of particles P (>= 2)")
+      ("threads", po::value(&threads)->value_name("N")->default_value(threads),
+       "worker threads; 0 = all cores (results do not depend on it)")
+      ("final-sweeps", po::value(&final_sweeps)->value_name("N")->default_value(final_sweeps),
+       "MCMC sweeps after the last truck: the same posterior, less seed-to-seed error; the marginal core's posterior "
+       "pools every sweep's cloud (latent core: 50 unless given, not pooled)")
+      ("cess", po::value(&cess_target)->value_name("X")->default_value(cess_target, shortest_text(cess_target)),
+       "conditional-ESS target of each tempering step, in (0, 1)")
+      ("max-sweeps", po::value(&max_sweeps)->value_name("N")->default_value(max_sweeps),
+       "MCMC sweeps per move phase at most (latent core: per tempering step, 5 unless given)")
+      ("older-sweeps", po::value(&older_sweeps)->value_name("N")->default_value(older_sweeps),
        "latent core: MH sweeps over every older truck's latents after each new truck (0 = off)")
-      ("window", po::value(&window)->default_value(window),
-       "latent core: keep and move only the last W trucks' latents per particle; older ones as sufficient statistics (0 = exact)")
-      ("checkpoint", po::value(&checkpoint_dir),
-       "a directory for the fit's checkpoints (marginal core; made if missing): a fit that stopped (a killed job, a lost MPI rank) "
-       "resumes from its last one with the same result, also on another number of ranks; a log grown since "
-       "goes on from it")
-      ("checkpoint-every", po::value(&checkpoint_every_s)->default_value(checkpoint_every_s, "600"),
+      ("window", po::value(&window)->value_name("N")->default_value(window),
+       "latent core: keep and move only the last N trucks' latents per particle; older ones as sufficient statistics "
+       "(0 = exact)")
+      ("checkpoint", po::value(&checkpoint_dir)->value_name("DIR"),
+       "a directory for the fit's checkpoints (marginal core; made if missing): a fit that stopped (a killed job, a "
+       "lost MPI rank) resumes from its last one with the same result, also on another number of ranks; a log grown "
+       "since goes on from it")
+      ("checkpoint-every", po::value(&checkpoint_every_s)->value_name("SECONDS")->default_value(checkpoint_every_s, "600"),
        "seconds of fitting between checkpoints (one is also written after the last truck)")
-      ("checkpoint-every-trucks", po::value(&checkpoint_every_trucks)->default_value(checkpoint_every_trucks),
+      ("checkpoint-every-trucks", po::value(&checkpoint_every_trucks)->value_name("N")->default_value(checkpoint_every_trucks),
        "also a checkpoint every this many trucks (0: by time only)")
-      ("verbose", po::bool_switch(&verbose), "print the move schedule, then every tempering step (phi, ESS, each scheduled move's runs and acceptance, jump per block)");
+      ("verbose", po::bool_switch(&verbose),
+       "print the move schedule, then every tempering step (phi, ESS, each scheduled move's runs and acceptance, jump "
+       "per block)");
   po::options_description mcmc("MCMC options (--method mcmc)");
   mcmc.add_options()
-      ("iterations", po::value(&iterations)->default_value(iterations), "MCMC sweeps in all")
-      ("burn-in", po::value(&burn_in)->default_value(burn_in), "sweeps discarded (proposal adaptation happens here)")
-      ("thin", po::value(&thin)->default_value(thin), "keep every thin-th sweep");
+      ("iterations", po::value(&iterations)->value_name("N")->default_value(iterations), "MCMC sweeps in all")
+      ("burn-in", po::value(&burn_in)->value_name("N")->default_value(burn_in),
+       "sweeps discarded (proposal adaptation happens here)")
+      ("thin", po::value(&thin)->value_name("N")->default_value(thin), "keep every N-th sweep");
   desc.add(smc).add(mcmc);
 }
 
@@ -210,8 +218,8 @@ std::unique_ptr<fleet::OnlineFit> fit_smc_on(const std::vector<const site::Site*
     *progress << " done, " << std::fixed << std::setprecision(3) << done.final_s << " s\n";
     progress->unsetf(std::ios::floatfield);
   }
-  // Where the time went, and what the ranks exchanged (README "Scale-out on MPI" takes its
-  // figures from this line). Every rank's table time is gathered first (a collective, so every
+  // Where the time went, and what the ranks exchanged (the MPI scaling figures come from this
+  // line). Every rank's table time is gathered first (a collective, so every
   // rank takes part, printing or not).
   std::vector<std::string> each;
   if (const fleet::MarginalSmc* m = smc->marginal(); m != nullptr && ranks.size() > 1)

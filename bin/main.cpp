@@ -1,46 +1,57 @@
 // ssrfleet: parse the subcommand name, hand the rest to that subcommand, and turn exceptions
 // into one clear message and a sysexits-style status: 64 usage, 65 data, 66 no input,
-// 70 internal, 74 I/O. Under mpirun (ssrfleet-mpi, README "Scale-out on MPI") rank 0 speaks for all.
+// 70 internal, 74 I/O, 75 busy. Under mpirun (ssrfleet-mpi, docs/sites.md) rank 0 speaks for all.
 #include <cstring>
 #include <functional>
 #include <iostream>
-#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
-#include "commands.hpp"
+#include "command_table.hpp"
+#include "help_format.hpp"
 #include "process_ranks.hpp"
 #include "util/errors.hpp"
 
 namespace {
 
-struct Command {
-  std::function<int(int, const char* const*)> run;
-  const char* summary;
-};
-
-const std::map<std::string, Command>& commands() {
-  static const std::map<std::string, Command> table = {
-      {"simulate", {ssrfleet::cli::run_simulate, "simulate a fleet over a road and write a WIM log"}},
-      {"road", {ssrfleet::cli::run_road, "write a preset road surface or summarise a road file"}},
-      {"fit", {ssrfleet::cli::run_fit, "fit the fleet posterior to a WIM log (SMC, or the batch MCMC)"}},
-      {"stream", {ssrfleet::cli::run_stream, "update the posterior truck by truck from a live WIM stream (crash-safe)"}},
-      {"predict", {ssrfleet::cli::run_predict, "predict the SSR pattern from a posterior, on this road or another"}},
-      {"diagnose", {ssrfleet::cli::run_diagnose, "find, name and fit the effect the model misses (checks, extensions, Bayes factors)"}},
-      {"damage", {ssrfleet::cli::run_damage, "damage along the road: fourth-power amplification, DLC, hot spots, ESAL per million trucks"}},
-      {"weigh", {ssrfleet::cli::run_weigh, "SSR-corrected static wheel loads from a log of raw tyre forces"}},
-      {"sites", {ssrfleet::cli::run_sites, "check a site manifest, list its sites, collect their posteriors into one table"}},
-      {"reproduce", {ssrfleet::cli::run_reproduce, "the paper's theoretical test end to end: figure data, plots, summary.md"}},
-  };
-  return table;
-}
+using ssrfleet::cli::command_table;
+using ssrfleet::cli::find_command;
 
 void print_usage(std::ostream& os) {
-  os << "ssrfleet " << SSRFLEET_VERSION
-     << " - fleet suspension inference and statistical spatial repeatability from MS-WIM data\n\n"
-        "usage: ssrfleet <command> [options]     (ssrfleet <command> --help for its options)\n\ncommands:\n";
-  for (const auto& [name, cmd] : commands()) os << "  " << name << std::string(12 - name.size(), ' ') << cmd.summary << "\n";
+  const int width = ssrfleet::cli::help_width();
+  using ssrfleet::cli::HelpRow;
+  using ssrfleet::cli::wrap;
+  os << "Usage: ssrfleet COMMAND [OPTIONS]\n"
+        "  or:  ssrfleet help [COMMAND]\n"
+        "  or:  ssrfleet --version\n\n"
+     << wrap(std::string("ssrfleet ") + SSRFLEET_VERSION +
+                 ": fleet suspension inference and statistical spatial repeatability (SSR) from multiple-sensor "
+                 "weigh-in-motion (MS-WIM) data.",
+             width, 0, 0)
+     << "\n\n";
+  std::vector<HelpRow> rows;
+  for (const auto& c : command_table()) rows.push_back({c.name, c.summary});
+  rows.push_back({"help", "print a command's help: ssrfleet help COMMAND is ssrfleet COMMAND --help"});
+  os << "Commands:\n" << ssrfleet::cli::format_rows(rows, width, 14) << "\n";
+  os << wrap("Each command's options: ssrfleet help COMMAND (or ssrfleet COMMAND --help). Options that take a "
+             "value accept --name VALUE and --name=VALUE.",
+             width, 0, 0)
+     << "\n\n";
+  os << "Exit status:\n"
+     << ssrfleet::cli::format_rows({{"0", "success"},
+                                    {"64", "bad usage: an unknown command or option, a malformed value"},
+                                    {"65", "bad data: an input file that cannot be read as what it should be"},
+                                    {"66", "a missing input file or directory"},
+                                    {"70", "an internal or numerical failure"},
+                                    {"74", "an input/output error (a full disk, a read-only directory)"},
+                                    {"75", "busy: the state directory is held by another stream"}},
+                                   width, 8)
+     << "\n";
+  os << "Options:\n"
+     << ssrfleet::cli::format_rows({{"-h, --help", "show this help"}, {"    --version", "print the version and exit"}},
+                                   width, 18);
 }
 
 // The command's status (main() ends every rank on an error: see there).
@@ -50,7 +61,7 @@ int run_command(int argc, char* argv[]) {
     return 64;
   }
   const std::string name = argv[1];
-  if (name == "--help" || name == "-h" || name == "help") {
+  if (name == "--help" || name == "-h" || (name == "help" && argc == 2)) {
     print_usage(std::cout);
     return 0;
   }
@@ -58,22 +69,36 @@ int run_command(int argc, char* argv[]) {
     std::cout << "ssrfleet " << SSRFLEET_VERSION << "\n";
     return 0;
   }
-  const auto it = commands().find(name);
-  if (it == commands().end()) {
-    std::cerr << "ssrfleet: unknown command '" << name << "'\n\n";
-    print_usage(std::cerr);
+  // `help CMD` is `CMD --help`.
+  const bool help = name == "help";
+  if (help && (std::strcmp(argv[2], "--help") == 0 || std::strcmp(argv[2], "-h") == 0)) {
+    print_usage(std::cout);
+    return 0;
+  }
+  const std::string command_name = help ? argv[2] : name;
+  const ssrfleet::cli::CommandInfo* command = find_command(command_name);
+  if (command == nullptr || (help && argc > 3)) {
+    if (help && command != nullptr) {
+      std::cerr << "ssrfleet help: one command at a time: ssrfleet help " << command_name << "\n";
+    } else {
+      std::cerr << "ssrfleet: unknown command '" << command_name << "'\n\n";
+      print_usage(std::cerr);
+    }
     return 64;
   }
+  const char* const help_argv[] = {command->name.c_str(), "--help", nullptr};
+  const int command_argc = help ? 2 : argc - 1;
+  const char* const* command_argv = help ? help_argv : argv + 1;
   // Rank 0 speaks for every rank; another rank's message names it.
   const std::string prefix =
-      "ssrfleet " + name + (ssrfleet::cli::process_ranks().rank() == 0 ? "" : ssrfleet::cli::rank_label()) + ": ";
+      "ssrfleet " + command->name + (ssrfleet::cli::process_ranks().rank() == 0 ? "" : ssrfleet::cli::rank_label()) + ": ";
   try {
     // Several ranks share one fit's work; the other commands run on one process.
-    if (ssrfleet::cli::process_ranks().size() > 1 && name != "fit") {
+    if (ssrfleet::cli::process_ranks().size() > 1 && command->name != "fit") {
       throw ssrfleet::UsageError("runs on one process: of the commands, only fit spreads over MPI ranks "
-                                 "(mpirun -np R ssrfleet-mpi fit ...); run ssrfleet " + name + " without mpirun");
+                                 "(mpirun -np R ssrfleet-mpi fit ...); run ssrfleet " + command->name + " without mpirun");
     }
-    return it->second.run(argc - 1, argv + 1);
+    return command->run(command_argc, command_argv);
   } catch (const ssrfleet::UsageError& e) {
     std::cerr << prefix << e.what() << "\n";
     return 64;

@@ -1,4 +1,4 @@
-// The processes this run of the command is (README "Scale-out on MPI"): one for `ssrfleet`
+// The processes this run of the command is (docs/sites.md): one for `ssrfleet`
 // (bin/process_ranks.cpp), those mpirun started for `ssrfleet-mpi` (mpi/process_ranks_mpi.cpp,
 // built with -DSSRFLEET_MPI=ON). main() starts and stops them; `fit` hands them to the marginal core.
 #pragma once

@@ -1,5 +1,5 @@
-// `ssrfleet sites M --check`: which site's fleet differs from the others' (issue 21 item 2;
-// discrepancy/site_conflicts.hpp). Fits each site alone and every other site without it.
+// `ssrfleet sites M --check`: which site's fleet differs from the others'
+// (discrepancy/site_conflicts.hpp). Fits each site alone and every other site without it.
 #pragma once
 
 #include <cstdint>

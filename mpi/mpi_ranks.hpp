@@ -1,4 +1,4 @@
-// util::Ranks over MPI_COMM_WORLD (README "Scale-out on MPI"): the one file of the project that
+// util::Ranks over MPI_COMM_WORLD (docs/sites.md): the one file of the project that
 // includes mpi.h, built only with -DSSRFLEET_MPI=ON into ssrfleet-mpi.
 #pragma once
 

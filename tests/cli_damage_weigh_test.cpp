@@ -1,4 +1,4 @@
-// ssrfleet damage, weigh and simulate --forces end to end (issue 18 items 1, 2 and 4): the exact
+// ssrfleet damage, weigh and simulate --forces end to end: the exact
 // headers, the options, and bad input refused with file, line and field and a non-zero status.
 #include <algorithm>
 #include <filesystem>
@@ -72,20 +72,25 @@ TEST_CASE("damage writes the issue's columns at the sensors, with further powers
   const std::string state = f.dir.file("state");
   std::filesystem::create_directories(state);
   std::filesystem::copy_file(f.posterior, state + "/posterior.json", std::filesystem::copy_options::overwrite_existing);
-  const auto anywhere = run_ssrfleet("damage --state " + q(state) + " --positions 80:0.5:82 --draws 10 --trucks-per-draw 5 --quiet", f.dir);
+  const auto anywhere = run_ssrfleet("damage --posterior " + q(state) + " --positions 80:0.5:82 --draws 10 --trucks-per-draw 5 --quiet", f.dir);
   INFO(anywhere.err);
   REQUIRE(anywhere.status == 0);
   CHECK(csv_rows(anywhere.out).size() == 6);
   CHECK(anywhere.err.find("expected damage per million trucks") != std::string::npos);  // the CSV took stdout
 
-  // Usage errors: both sources, a power asked twice, a bad threshold, another site by accident.
-  CHECK(run_ssrfleet("damage --posterior " + q(f.posterior) + " --state " + q(state), f.dir).status == 64);
+  // Usage errors: --state (a stream's option: a state directory is read with --posterior), a power
+  // asked twice, a bad threshold, another site by accident.
+  for (const char* state_option : {" --state ", " --state="}) {
+    const auto state_given = run_ssrfleet("damage --posterior " + q(f.posterior) + state_option + q(state), f.dir);
+    CHECK(state_given.status == 64);
+    CHECK(state_given.err.find("--posterior DIR") != std::string::npos);
+  }
   CHECK(run_ssrfleet("damage --posterior " + q(f.posterior) + " --power 4", f.dir).status == 64);
   CHECK(run_ssrfleet("damage --posterior " + q(f.posterior) + " --threshold -1", f.dir).status == 64);
   const auto other = run_ssrfleet("damage --posterior " + q(f.posterior) + " --road AS2", f.dir);
   CHECK(other.status == 64);
   CHECK(other.err.find("--new-road") != std::string::npos);
-  CHECK(run_ssrfleet("damage --state " + q(f.dir.file("nowhere")), f.dir).status == 66);
+  CHECK(run_ssrfleet("damage --posterior " + q(f.dir.file("nowhere")), f.dir).status == 66);
 }
 
 TEST_CASE("simulate writes a force log and the true static weights, and weigh estimates them", "[cli]") {

@@ -23,7 +23,8 @@ TEST_CASE("diagnose on a small log writes the JSON report and the per-sensor fil
   REQUIRE(sim.status == 0);
   CHECK(test::read_text(log).find("model sensor_gain:sensor=3,gain=1.1") != std::string::npos);  // in the header comment
   const auto r = run_ssrfleet("diagnose " + q(log) + " --particles 64 --draws 20 --candidates sensor_gain --no-plots --json " +
-                                  q(dir.file("report.json")) + " --out " + q(dir.file("diag")),
+                                  q(dir.file("report.json")) + " --out " + q(dir.file("diag")) + " --posterior-out " +
+                                  q(dir.file("ends.json")),
                               dir);
   INFO(r.err);
   REQUIRE(r.status == 0);
@@ -42,6 +43,8 @@ TEST_CASE("diagnose on a small log writes the JSON report and the per-sensor fil
   const std::string effect = j["effect"].get<std::string>();
   CHECK(post["model"] == (effect == "none" ? std::string("base") : effect));
   if (effect != "none") CHECK(post["extension"].size() == 2);  // sensor_gain's sensor and gain
+  // --posterior-out writes the same posterior where it is asked for.
+  CHECK(test::read_text(dir.file("ends.json")) == test::read_text((dir.path() / "diag" / "posterior.json").string()));
   const auto pred = run_ssrfleet("predict --posterior " + q((dir.path() / "diag" / "posterior.json").string()) +
                                      " --draws 10 --trucks-per-draw 10 --quiet", dir);
   INFO(pred.err);
@@ -61,6 +64,13 @@ TEST_CASE("diagnose and simulate --effect refuse bad input with a clear message 
   r = run_ssrfleet("simulate --trucks 5 --effect tyre_damping:c_t=-3 --quiet --out " + q(dir.file("w.csv")), dir);
   CHECK(r.status == 64);
   CHECK(r.err.find("tyre_damping.c_t = '-3' must be a number in [0, 10000]") != std::string::npos);
+
+  // The posterior diagnose writes is an output: --posterior-out; --posterior (what predict, damage and
+  // weigh read) is refused by name, not taken as an abbreviation of --posterior-out.
+  r = run_ssrfleet("diagnose " + q(log) + " --posterior " + q(dir.file("p.json")), dir);
+  CHECK(r.status == 64);
+  CHECK(r.err.find("--posterior-out FILE") != std::string::npos);
+  CHECK(!std::filesystem::exists(dir.file("p.json")));
 
   r = run_ssrfleet("diagnose " + q(dir.file("missing.csv")), dir);
   CHECK(r.status == 66);

@@ -1,4 +1,4 @@
-// fit --checkpoint DIR (io/fit_checkpoint.hpp; README "Checkpoints of a fit"): a fit goes on from its
+// fit --checkpoint DIR (io/fit_checkpoint.hpp): a fit goes on from its
 // checkpoint with the bits of a run that never stopped, and a checkpoint that does not belong to
 // the log, or is damaged, is refused by name.
 #include <filesystem>

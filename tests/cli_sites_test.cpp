@@ -1,4 +1,4 @@
-// Many sites fitted one by one (issue 21 items 5 and 6): `fit --sites M --site NAME`, `sites`
+// Many sites fitted one by one: `fit --sites M --site NAME`, `sites`
 // (check, --names, --collect), scripts/fit-sites.sh (GNU parallel) and scripts/fit-sites.sbatch
 // (a Slurm array task), and a bad manifest entry named by manifest, site and field.
 #include <algorithm>

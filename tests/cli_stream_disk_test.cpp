@@ -1,4 +1,4 @@
-// The stream on a real full disk and a real read-only one (issue 20, item 5): a small tmpfs that
+// The stream on a real full disk and a real read-only one: a small tmpfs that
 // fills up mid-stream, then the same tmpfs remounted read-only. Mounting needs root (CI runs as
 // root); elsewhere the test says so and stops, and stream_state_faults_test.cpp, which injects the
 // same failures at every write, still runs.

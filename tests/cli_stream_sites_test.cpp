@@ -1,4 +1,4 @@
-// A stream of several sites, one fleet (issue 21 items 1 and 6): `stream --sites M` reads one input
+// A stream of several sites, one fleet: `stream --sites M` reads one input
 // whose `site` column names each record's site, quarantines a record of no or an unknown site, keeps
 // truck ids per site, resumes exactly, refuses a resume with other sites, and reads a state of one
 // site written before states named their sites.

@@ -221,7 +221,7 @@ TEST_CASE("the sqlite3 shell reading a running stream's history always sees whol
   const std::string state = dir.file("state"), out = dir.file("query.txt");
   const pid_t pid = spawn_ssrfleet(stream_args(state, log));
   // Reports, their last seq, and prediction rows: a row set is all there or not at all.
-  // A reader waits out the writer's brief locks (SQLite's busy timeout), as the README says to.
+  // A reader waits out the writer's brief locks (SQLite's busy timeout), as docs/streaming.md says to.
   const std::string query = "sqlite3 -cmd '.timeout 5000' " + q(state + "/history.sqlite") +
                             " 'SELECT count(*), coalesce(max(seq), 0), (SELECT count(*) FROM predictions), "
                             "(SELECT count(*) FROM hyperparameters) FROM reports;' > " + q(out) + " 2>&1";
