@@ -1,4 +1,4 @@
-// Cost curves for the README's log-log plot (issue 14, item 8): per-truck wall time against the
+// Cost curves for a log-log plot: per-truck wall time against the
 // number of trucks n, for the three ways ssrfleet can fit a log.
 //   - the latent core (fleet::FleetSmc, `fit --core latent`: 1,024 particles, 2 threads, seed 1,
 //     the same trucks as scale_benchmark: Table 1 fleet, AS1, σ_IF = 0.02, simulated in chunks of

@@ -1,5 +1,5 @@
 // End-to-end fit benchmark (the issue "SMC vs MCMC on one fleet"): one simulated data set, a
-// 100-truck AS1 fleet drawn from Table 1 (DESIGN.md §3) with sigma_IF = 0.02, fitted twice:
+// 100-truck AS1 fleet drawn from Table 1 (docs/model.md) with sigma_IF = 0.02, fitted twice:
 //
 //   SMC  - FleetSmc replaying the log truck by truck (default options except particles, threads,
 //          seed): total wall time, per-truck update latency (steady_clock around absorb()),

@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
         line[j] += amp * std::sin(2.0 * std::numbers::pi * n * kDx * static_cast<double>(j) + phase);
     }
 
-  // Fleet: Table 1 draws (DESIGN.md §3).
+  // Fleet: Table 1 draws (docs/model.md).
   std::normal_distribution<double> normal;
   QuarterCarBatch cars;
   cars.assign(trucks, QuarterCar{});

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Scale-out on MPI, measured (issue 21 item 4; README "Scale-out on MPI"). One joint fit of three
+# Scale-out on MPI, measured (docs/sites.md). One joint fit of three
 # sites (AS1 with 16 sensors, AS2 with 8, AS3 with 12; TRUCKS each) run side by side, REPS times in
 # turn so a noisy shared machine hits every variant alike:
 #   one    ssrfleet fit --sites, 1 process, 1 thread
@@ -90,7 +90,7 @@ records=$((3 * trucks))
         "$(calc "$bytes / $records")" "$(calc "$calls / $records")" "$bytes" "$calls"
     fi
   done
-  # The projection (README "Scale-out on MPI"), from the figures above: per record, the work that
+  # The projection (docs/sites.md), from the figures above: per record, the work that
   # splits over R ranks (tables, stages with moves, final sweeps, each truck's own stage but its
   # reweighting, of the one-thread run), the work that does not (the rest of that run), and the
   # collectives at R ranks, each costed as a tree of ceil(log2 R) steps there and back:

@@ -1,4 +1,4 @@
-// Ratio benchmark (issue 14, item 6; DESIGN.md §4): the wall time to an equivalent ESS of 400 on
+// Ratio benchmark (docs/inference.md): the wall time to an equivalent ESS of 400 on
 // all 7 hyperparameters, measured side by side in one run, for
 //   (a) the marginal SMC core (fleet::MarginalSmc: default options, 1,024 particles, 2 threads, the
 //       log replayed truck by truck, then rejuvenate(final_sweeps), the posterior the pool of every

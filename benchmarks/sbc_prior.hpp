@@ -1,7 +1,7 @@
 // The prior of the simulation-based calibration (sbc_benchmark.cpp, issue 17 item 5): the law θ is
 // drawn from, and the prior the fit is given, so that the two are the same law.
 //
-// Why not the design priors (DESIGN.md §3, fleet::PriorBounds{}): SBC needs the simulator and the
+// Why not the model's default priors (docs/model.md, fleet::PriorBounds{}): SBC needs the simulator and the
 // model to share their support. The model's k ~ N(K, σ_k²) and k_t ~ N(K_t, σ_kt²) are untruncated,
 // while a simulated truck is physical (fleet::draw_fleet truncates every stiffness to positive by
 // rejection). Under the design box a draw such as σ_kt = 2e6 beside K_t = 5e5 makes a third of

@@ -1,4 +1,4 @@
-// Scale benchmark (issue 14, items 2, 3, 4 and 8; DESIGN.md §4 "Judging flat per-truck cost"):
+// Scale benchmark (docs/inference.md, how a flat per-truck cost is judged):
 // streams a simulated log truck by truck into the marginal core (fleet::MarginalSmc: 1,024
 // particles, 2 threads, seed 1; Table 1 fleet, road AS1, σ_IF = 0.02) and records
 //   - the wall time of every absorb() (a float per truck), and from it the mean per truck over

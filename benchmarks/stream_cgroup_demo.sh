@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 20 item 6 (README "Load with bad records"): `ssrfleet stream` over the same log twice, side
+# A stream's memory under a limit (docs/streaming.md): `ssrfleet stream` over the same log twice, side
 # by side, each in its own cgroup-v1 memory limit: the default (tables, truck data and ids in spill
 # files the kernel pages) and --tables-in-memory. Needs root and /sys/fs/cgroup/memory.
 # Usage: benchmarks/stream_cgroup_demo.sh BINARY LOG LIMIT_MB   (in a scratch directory)

@@ -37,7 +37,7 @@ check() {
   for dir in "$root"/lib/*/; do
     folder="$(basename "$dir")"
     if [ -z "${allowed[$folder]+x}" ]; then
-      echo "check-layers: lib/$folder has no line in cmake/layers.txt: add one (DESIGN.md: new folders take the row of what they do)" >&2
+      echo "check-layers: lib/$folder has no line in cmake/layers.txt: add one (a new folder takes the row of what it does: docs/ARCHITECTURE.md)" >&2
       status=1
     fi
   done
@@ -95,7 +95,7 @@ check() {
   fi
 
   if [ "$status" -ne 0 ]; then
-    echo "check-layers: FAILED (the layers are in cmake/layers.txt and DESIGN.md \"Layout\"; move the code down, do not widen a line)" >&2
+    echo "check-layers: FAILED (the layers are in cmake/layers.txt and docs/ARCHITECTURE.md; move the code down, do not widen a line)" >&2
   fi
   return "$status"
 }

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fits every site of a manifest alone, several at once on one machine with GNU parallel, and
-# collects their posteriors into one table (issue 21 item 5; README "Many sites").
+# collects their posteriors into one table (docs/sites.md).
 #   scripts/fit-sites.sh MANIFEST OUTDIR [fit options...]
 # writes OUTDIR/NAME.json per site (ssrfleet fit --sites MANIFEST --site NAME), OUTDIR/NAME.log
 # (its progress) and OUTDIR/sites.csv (ssrfleet sites --collect). The fit options are passed to

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The fuzz campaign (issue 20 item 1; README "Fuzzing"): configures build-fuzz/ with clang and
+# The fuzz campaign (CONTRIBUTING.md): configures build-fuzz/ with clang and
 # libFuzzer (-DSSRFLEET_FUZZ=ON: ASan + UBSan, coverage instrumentation), builds every harness of
 # fuzz/, then runs each in turn for SECONDS (default 60) over a copy of its seed corpus, printing per
 # harness the executions, coverage (cov: edges, ft: features, from -print_final_stats=1) and crashes.

@@ -1,9 +1,27 @@
 #!/usr/bin/env bash
-# Installs every build, test and plotting dependency of ssrfleet on Debian 12 (Open MPI for the
-# -DSSRFLEET_MPI=ON build that scripts/test.sh makes). Idempotent.
+# Installs the Debian 12 packages ssrfleet needs. Idempotent: only missing packages are installed,
+# without recommends.
+#
+#   scripts/setup-debian.sh          everything: build, tests, benchmarks, plots, Open MPI for the
+#                                    -DSSRFLEET_MPI=ON build, help2man for the man pages (what
+#                                    scripts/test.sh needs)
+#   scripts/setup-debian.sh --main   only what the `ssrfleet` command and `ssrfleet reproduce` need
+#                                    (what scripts/run-main.sh needs): compiler, CMake, the libraries
+#                                    it links or includes, gnuplot for the plots
 set -euo pipefail
-packages=(build-essential cmake git libeigen3-dev libboost-dev libboost-program-options-dev
-          catch2 nlohmann-json3-dev libsqlite3-dev sqlite3 gnuplot-nox parallel libopenmpi-dev openmpi-bin)
+# The ssrfleet target: Eigen, Boost (headers, program_options), nlohmann-json, SQLite (the stream's
+# history); gnuplot renders reproduce's plots (without it the scripts are written, not run).
+main_packages=(build-essential cmake libeigen3-dev libboost-dev libboost-program-options-dev
+               nlohmann-json3-dev libsqlite3-dev gnuplot-nox)
+# Beyond the main job: git (CI clones the checkout), Catch2 (tests), sqlite3 (the tests query the
+# history), GNU parallel (scripts/fit-sites.sh), Open MPI (ssrfleet-mpi and its test), help2man
+# (the man pages).
+full_packages=("${main_packages[@]}" git catch2 sqlite3 parallel libopenmpi-dev openmpi-bin help2man)
+case "${1:-}" in
+  --main) packages=("${main_packages[@]}") ;;
+  "") packages=("${full_packages[@]}") ;;
+  *) echo "usage: scripts/setup-debian.sh [--main]" >&2; exit 64 ;;
+esac
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

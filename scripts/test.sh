@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The README's test command: installs dependencies, checks the layers of lib/ (cmake/layers.txt),
-# builds (with ssrfleet-mpi beside ssrfleet: -DSSRFLEET_MPI=ON), runs the default test suite (its
+# The test command: installs every dependency, checks the layers of lib/ (cmake/layers.txt), builds
+# everything (with ssrfleet-mpi beside ssrfleet: -DSSRFLEET_MPI=ON), runs the default test suite (its
 # "mpi" test runs mpirun -np 1, 2 and 4).
 # The slow statistical checks carry the CTest label "long"; run them with: ctest --test-dir build -L long
 set -euo pipefail

@@ -1,4 +1,4 @@
-// The model-discrepancy workflow (issue 6, DESIGN.md §6): data simulated with an effect switched
+// The model-discrepancy workflow (docs/diagnosis.md): data simulated with an effect switched
 // on and fitted without it. `diagnose` must name the effect, recover its parameters within their
 // 95 % intervals and close at least half of the gap; on data with no effect it must say "none".
 // The default suite runs small fleets; the [long] cases run the issue's 100-truck fleets.

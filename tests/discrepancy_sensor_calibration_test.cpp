@@ -86,7 +86,7 @@ TEST_CASE("sensor calibration by Monte Carlo EM recovers a sensor's gain and a s
   CHECK(std::abs(seen.front().step[0].gain[4] - 1.0) > 5.0 * seen.front().step[0].se[4]);
   // Every gain within 4.5 standard errors of the truth (24 gains: a normal deviate beyond 4.5 has
   // probability 7e-6 each; the standard errors are Rubin's, which run about 7 % small over 20 such
-  // networks (README "Sensor calibration"), so 4.5 of them is 4.2 true ones, 3e-5 each).
+  // networks (docs/sites.md), so 4.5 of them is 4.2 true ones, 3e-5 each).
   for (std::size_t site = 0; site < 2; ++site) {
     for (Eigen::Index j = 0; j < done.gains[site].size(); ++j) {
       INFO("site " << site << " sensor " << (j + 1) << ": " << done.gains[site][j] << " +- " << done.se[site][j]);

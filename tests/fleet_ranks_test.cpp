@@ -1,4 +1,4 @@
-// A marginal fit split over ranks (util/ranks.hpp; README "Scale-out on MPI"), with threads standing
+// A marginal fit split over ranks (util/ranks.hpp; docs/sites.md), with threads standing
 // in for MPI ranks (thread_ranks.hpp): the same bits as one process for any rank count, and a
 // checkpoint written on some ranks resumes on any other number.
 #include <map>

@@ -1,4 +1,4 @@
-// Every crash the fuzz harnesses (fuzz/, README "Fuzzing") found, as the input that crashed, now a
+// Every crash the fuzz harnesses (fuzz/, CONTRIBUTING.md) found, as the input that crashed, now a
 // clean DataError naming the file and the field. Each case says which harness found it and what
 // the crash was.
 #include <chrono>

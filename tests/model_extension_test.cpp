@@ -1,4 +1,4 @@
-// The model-extension catalogue (DESIGN.md §6): each extension's forward model against an
+// The model-extension catalogue (docs/model.md): each extension's forward model against an
 // independent construction of the same physics, and the effect-setting parser.
 #include <algorithm>
 #include <cmath>

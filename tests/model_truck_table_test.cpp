@@ -94,7 +94,7 @@ TEST_CASE("a truck table's marginal likelihood agrees with brute-force integrati
       const double mine = marginal.log_likelihood(table, marginal.prepare(th));
       const double reference = brute_force_log_likelihood(site, r, table.fit, th);
       INFO("truck " << i << ", sigma_if " << th[fleet::kSigmaIf] << ": table " << mine << ", brute force " << reference);
-      // The budget (DESIGN.md §4 asks each approximation to be measured): node truncation at 12
+      // The budget (each approximation is measured: docs/inference.md): node truncation at 12
       // nats (< 1e-5), the rectangle rule at 1.0 of the width (~1e-8), the z moment matching
       // ((s/σ_z)³ ~ 1e-4) and the Laplace form within 2 % of σ_ref (~1e-5): 2e-3 nats bounds them all.
       CHECK(std::abs(mine - reference) < 2e-3);

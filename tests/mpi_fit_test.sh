@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Scale-out on MPI (README "Scale-out on MPI"; CTest label "mpi", registered when -DSSRFLEET_MPI=ON):
+# Scale-out on MPI (docs/sites.md; CTest label "mpi", registered when -DSSRFLEET_MPI=ON):
 #   1. mpirun -np 1, 2 and 4 of ssrfleet-mpi fit --sites M write the very posterior file of the
 #      single-process ssrfleet fit --sites M (byte for byte);
 #   2. a run that loses a rank (kill -9 of one rank's process) after a checkpoint resumes on

@@ -1,4 +1,4 @@
-// The road-surface CSV of DESIGN.md §7: exact round trip, and every defect named by file, line
+// The road-surface CSV of docs/site-data.md: exact round trip, and every defect named by file, line
 // and field.
 #include <catch2/catch.hpp>
 

@@ -1,4 +1,4 @@
-// Tyre envelopment (DESIGN.md §1): a centred moving average whose transfer function is known.
+// Tyre envelopment (docs/model.md): a centred moving average whose transfer function is known.
 #include <catch2/catch.hpp>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// The random road surface of DESIGN.md §1: ISO 8608 line PSD along travel and across it,
+// The random road surface of docs/model.md: ISO 8608 line PSD along travel and across it,
 // reproducibility, presets.
 #include <catch2/catch.hpp>
 

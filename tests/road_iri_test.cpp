@@ -1,5 +1,7 @@
 // The International Roughness Index: the Golden Car's discretisation against Sayers' published
-// matrices, and the IRI against the Golden Car's analytic frequency response.
+// matrices (Sayers, M.W. (1995) "On the calculation of International Roughness Index from
+// longitudinal road profile", Transportation Research Record 1501; ASTM E1926), and the IRI against
+// the Golden Car's analytic frequency response.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -130,8 +132,10 @@ TEST_CASE("the IRI of generated roads agrees with the spectral estimate", "[road
 }
 
 TEST_CASE("the IRI equals Sayers' algorithm run with his published Golden Car matrices", "[road][iri]") {
-  // ASTM E1926 / Sayers (1995) at a 0.25 m interval, written out with the published ST and PR of
-  // ../shared/data/golden-car.md: slope input, states started on the first 11 m's average slope.
+  // The algorithm of ASTM E1926 and Sayers, M.W. (1995) "On the calculation of International
+  // Roughness Index from longitudinal road profile", Transportation Research Record 1501, at a
+  // 0.25 m interval and 80 km/h, written out with the ST and PR matrices published there (the same
+  // as in the test above): slope input, states started on the first 11 m's average slope.
   Eigen::Matrix4d st;
   st << 0.9966071, 0.01091514, -0.002083274, 0.0003190145,
         -0.5563044, 0.9438768, -0.8324718, 0.05064701,

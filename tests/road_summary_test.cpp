@@ -70,7 +70,7 @@ TEST_CASE("the roughness class is labelled with its table, and the paper's older
   CHECK_THROWS_AS(parse_roughness_table("bs"), std::invalid_argument);
 
   // The presets' fitted levels (AS1 ~23e-6, AS3 ~64e-6 within the 35 % band of one surface) land
-  // inside a class in both tables, as DESIGN.md §1 says.
+  // inside a class in both tables, as docs/model.md says.
   SummaryOptions paper;
   paper.table = RoughnessTable::iso_draft_1982;
   CHECK(summarize(preset_surface("AS1")).roughness_class.label == "A");

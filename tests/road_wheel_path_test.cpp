@@ -1,4 +1,4 @@
-// The wheel path at a lateral position (DESIGN.md §1): linear between lines, never clamped.
+// The wheel path at a lateral position (docs/model.md): linear between lines, never clamped.
 #include <catch2/catch.hpp>
 
 #include <string>

@@ -1,5 +1,6 @@
 // Known-answer test of the tempered SMC evidence estimate: the radiata pine regression
-// (Williams 1959; Friel & Pettitt 2008), whose exact log evidence is in shared/data/README.md.
+// (Williams 1959; Friel & Pettitt 2008), whose data and exact log evidences are in tests/data/
+// (radiata.csv; README.md says how the exact values were computed).
 // The engine tempers from the prior to the posterior in one stage; its log Z over independent
 // seeds must agree with the exact value within the Monte Carlo error measured over the seeds.
 #include <catch2/catch.hpp>
@@ -28,14 +29,18 @@ struct RadiataData {
 };
 
 RadiataData read_radiata() {
-  const std::string path = std::string(SSRFLEET_SHARED_DATA_DIR) + "/radiata.csv";
+  const std::string path = std::string(SSRFLEET_TEST_DATA_DIR) + "/radiata.csv";
   std::ifstream in(path);
   REQUIRE(in.good());
   std::string line;
-  std::getline(in, line);  // header "y","x1","x2"
+  bool header = true;  // the first line that is not a '#' comment: "y","x1","x2"
   std::vector<double> y, x1, x2;
   while (std::getline(in, line)) {
-    if (line.empty()) continue;
+    if (line.empty() || line[0] == '#') continue;
+    if (header) {
+      header = false;
+      continue;
+    }
     std::istringstream row(line);
     std::string a, b, c;
     std::getline(row, a, ',');
@@ -136,7 +141,7 @@ class RadiataModel : public smc::TemperedModel {
   Eigen::MatrixXd theta_;
 };
 
-constexpr double kExactLogZ1 = -309.9243;  // model 1 (x1), shared/data/README.md
+constexpr double kExactLogZ1 = -309.9243;  // model 1 (x1), tests/data/README.md
 constexpr double kExactLogZ2 = -301.4351;  // model 2 (x2)
 
 struct RadiataRun {

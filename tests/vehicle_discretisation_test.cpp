@@ -1,5 +1,7 @@
 // The exact discretisation (vehicle/discretisation.hpp) against a published known answer (the IRI
-// Golden Car, ../shared/data/golden-car.md) and against the augmented matrix exponential.
+// Golden Car's ST and PR matrices: Sayers, M.W. (1995) "On the calculation of International
+// Roughness Index from longitudinal road profile", Transportation Research Record 1501; ASTM E1926)
+// and against the augmented matrix exponential.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -61,7 +63,9 @@ double worst_relative(const M1& computed, const M2& reference) {
 
 TEST_CASE("ZOH discretisation of the Golden Car reproduces Sayers' published ST and PR",
           "[vehicle][discretisation]") {
-  // golden-car.md: per unit sprung mass, state (z_s, z_s', z_u, z_u'), 0.25 m at 80 km/h.
+  // The Golden Car per unit sprung mass: k_t/m_s = 653 s^-2, k_s/m_s = 63.3 s^-2, c_s/m_s = 6 s^-1,
+  // m_u/m_s = 0.15; state (z_s, z_s', z_u, z_u'), 0.25 m at 80 km/h; ST = exp(A dt),
+  // PR = integral over [0, dt] of exp(A s) ds B, the profile held constant over each interval.
   const double K1 = 653.0, K2 = 63.3, C = 6.0, u = 0.15;
   Eigen::Matrix4d A;
   A << 0, 1, 0, 0,     //
@@ -79,8 +83,8 @@ TEST_CASE("ZOH discretisation of the Golden Car reproduces Sayers' published ST 
   const Eigen::Vector4d PR(0.005476107, 1.388776, 0.2275968, 35.79262);
 
   // The published figures are printed to 7 significant digits, but were computed with less
-  // precision than that: ST agrees with the exact exponential to ~4e-7 relative and PR to ~2e-5
-  // (golden-car.md). Those are the tolerances, per entry, relative to the printed value.
+  // precision than that: ST agrees with the exact exponential to ~4e-7 relative and PR to ~2e-5.
+  // Those are the tolerances, per entry, relative to the printed value.
   const Discretisation<1> fast = discretise<1>(A, B, dt);
   const Discretisation<1> ref = discretise_expm<1>(A, B, dt);
   const double worst_st = worst_relative(fast.Phi, ST);

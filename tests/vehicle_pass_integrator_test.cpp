@@ -28,7 +28,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// The 16 MS-WIM sensors of DESIGN.md §2: 76.0, 77.5, ..., 98.5 m.
+// The 16 MS-WIM sensors of docs/model.md: 76.0, 77.5, ..., 98.5 m.
 std::vector<double> sensor_positions() {
   std::vector<double> p;
   for (int i = 0; i < 16; ++i) p.push_back(76.0 + 1.5 * i);
@@ -258,8 +258,8 @@ TEST_CASE("the integrator agrees with a fine-step RK4 solution on a rough road, 
     CHECK(err < 1e-4);
     WARN("rough road, c_t = " << ct << ": max |IF - IF_RK4| over 16 sensors " << err);
     if (ct == 0.0) {
-      // The staircase shifts the profile by half a sample: DESIGN.md §2 quotes a bias of about
-      // 3e-3 in IF at 5 cm, far more than the FOH error.
+      // The staircase shifts the profile by half a sample, a bias of about 3e-3 in IF at 5 cm
+      // (vehicle/pass_integrator.hpp), far more than the FOH error.
       const std::vector<double> staircase = staircase_pass(car, speed, r, dx, positions);
       Eigen::VectorXd st(16);
       for (int i = 0; i < 16; ++i) st[i] = staircase[static_cast<std::size_t>(i)];

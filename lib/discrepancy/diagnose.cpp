@@ -27,12 +27,12 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // A fitted SMC together with the extension it points at (which must outlive it). The base model
-// runs on the marginal core (DESIGN.md §4): its checks draw every truck's latents from their exact
+// runs on the marginal core (docs/inference.md): its checks draw every truck's latents from their exact
 // conditional given θ (marginal_draws.hpp). An extension's refit runs on the latent core, which
 // carries ψ in its particles and re-simulates every kept truck when ψ moves: the marginal core's
 // tables hold one forward model, and the effects that change it (a sensor's gain, the dynamics, a
-// profile defect) would each need tables over a grid of ψ (DESIGN.md §4 allows either at diagnose
-// sizes of about 100 trucks; README, "Diagnosing model discrepancy", has the costs).
+// profile defect) would each need tables over a grid of ψ (either core serves at diagnose sizes
+// of about 100 trucks; docs/inference.md says which model runs on which core).
 struct Fitted {
   std::unique_ptr<fleet::ModelExtension> extension;
   std::unique_ptr<fleet::OnlineFit> online;

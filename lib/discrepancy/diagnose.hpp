@@ -1,4 +1,4 @@
-// The model-discrepancy workflow (DESIGN.md §6): fit the base model, run the posterior
+// The model-discrepancy workflow (docs/diagnosis.md): fit the base model, run the posterior
 // predictive checks, shortlist the catalogue's extensions whose signature matches the failed
 // checks, refit with each by the same SMC, choose by log-evidence (the Bayes factor against the
 // base model) confirmed by held-out predictive skill, and measure the gap again with the chosen

@@ -1,6 +1,6 @@
 // What the posterior predictive checks need (posterior_checks.hpp), from a fit on the marginal
 // core, whose particles carry θ alone: every truck's latents are drawn afresh from their exact
-// conditional p(x_i | y_i, θ) for each posterior draw of θ (DESIGN.md §4). The draw starts from
+// conditional p(x_i | y_i, θ) for each posterior draw of θ (docs/inference.md). The draw starts from
 // the truck's table (model/table_proposal.hpp) and is made exact by independence
 // Metropolis–Hastings with the quarter-car integrator: the table's mixture proposes, the exact
 // likelihood and fleet density accept. One integrator pass per truck per step.

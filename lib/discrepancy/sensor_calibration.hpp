@@ -1,4 +1,4 @@
-// Per-site sensor calibration fitted beside the fleet (issue 21 item 1; README "Sensor calibration").
+// Per-site sensor calibration fitted beside the fleet (docs/sites.md).
 // A site's sensor j may read g_j times the true impact factor. The marginal core's tables hold the
 // base forward model at the data as logged, so the gains cannot ride in its particles; they are fitted
 // by Monte Carlo EM around it instead:
@@ -50,7 +50,7 @@ std::vector<SensorGains> estimate_sensor_gains(const fleet::MarginalSmc& fit, co
 struct CalibrationOptions {
   int max_rounds = 8;        // fits in all, the first one included
   // Converged when every gain's step |ĝ - 1| is below this many of its standard errors. The EM steps
-  // shrink geometrically (by about half a round on the logs of README "Sensor calibration"), so what
+  // shrink geometrically (by about half a round on two simulated sites with miscalibrated sensors), so what
   // is left beyond the last step is about as much again. The steps carry Monte Carlo noise of
   // sqrt(B / D) (B the between-draw variance, at most T): with D = 100 draws at most 0.1 se a gain,
   // about 0.25 se for the largest of 24 gains, which this tolerance stays above.

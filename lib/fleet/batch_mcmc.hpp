@@ -1,6 +1,6 @@
 // The paper's batch MCMC (Wilson, Harris & O'Brien §3.2): Metropolis-within-Gibbs over all
 // 3N + 7 unknowns of the fleet model (fleet_model.hpp), the baseline that the sequential
-// sampler is checked and benchmarked against (DESIGN.md §4).
+// sampler is checked and benchmarked against (docs/inference.md).
 //
 // One sweep:
 //  1. Latents. Given theta the trucks are conditionally independent, so every truck proposes a
@@ -17,7 +17,7 @@
 //     so no integrator call is needed. With n < 2 the shape is not positive: random-walk MH.
 //  4. (Z, sigma_z): the truncation of z_n to the road makes the normaliser depend on both, so
 //     there is no conjugate form: `z_moves_per_sweep` joint random-walk MH steps (cheap, O(N)).
-//  5. With a model extension (`extension`, model_extension.hpp; DESIGN.md §6), its parameters ψ
+//  5. With a model extension (`extension`, model_extension.hpp; docs/model.md), its parameters ψ
 //     (uniform on their box) join the chain, and every simulated pass goes through the extended
 //     forward model the latent SMC core uses (model/extended_forward.hpp). Each sweep after the
 //     θ steps: if the extension has a jump between distant modes (ModelExtension::jump), one

@@ -1,5 +1,5 @@
 // Online fleet inference: absorbs WIM records one at a time, each as one tempered SMC stage
-// (DESIGN.md §4), and can hand out the current posterior at any moment.
+// (docs/inference.md), and can hand out the current posterior at any moment.
 #pragma once
 
 #include <deque>

@@ -14,7 +14,7 @@
 // Metropolis-within-Gibbs sweep per particle, and it keeps older trucks' paths from collapsing
 // onto a few ancestors (path degeneracy) at a cost of n passes per particle per truck.
 //
-// Stage base density (log γ, DESIGN.md §4):
+// Stage base density (log γ, docs/inference.md):
 //   log p(θ) + Σ_{i≤n} [log p(x_i | θ) + log p(y_i | x_i, σ_IF)] + log p(x_{n+1} | θ)
 // computed in O(1) per particle from running sums (Σk, Σk², Σk_t, Σk_t², Σz, Σz², ΣSSR), or, with
 // an extension's stiffness distribution (which has no sufficient statistic), in O(n) for the k part.
@@ -50,7 +50,7 @@ class FleetTarget final : public smc::TemperedModel {
     // (Σk, Σk², Σk_t, Σk_t², Σz, Σz², ΣSSR) and its latents are frozen from then on. 0 = exact
     // (every truck's latents kept and moved, memory growing with the stream).
     Eigen::Index window = 0;
-    // An optional model extension (DESIGN.md §6): its parameters ψ join θ in every particle,
+    // An optional model extension (docs/model.md): its parameters ψ join θ in every particle,
     // drawn from their prior before the first truck, and move by the model moves "extension jump"
     // (the extension's own jump between distant modes, ModelExtension::jump, if it has one) and
     // "extension random walk", each sweep re-simulating every kept truck (n passes per particle).

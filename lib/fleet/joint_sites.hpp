@@ -1,4 +1,4 @@
-// Several sites, one fleet (README "Many sites"): what a fit over many sites needs beyond one
+// Several sites, one fleet (docs/sites.md): what a fit over many sites needs beyond one
 // site's fit. The sites share the fleet's hyperparameters θ; each truck's table is built through
 // the site that logged it (WimRecord::site), so the marginal core fits them all at once
 // (MarginalTarget, model/fleet_marginal.hpp).
@@ -26,8 +26,8 @@ std::string sites_fingerprint(const std::vector<const site::Site*>& sites);
 // order; its Monte Carlo error does).
 std::vector<records::WimRecord> merge_site_records(std::vector<std::vector<records::WimRecord>> per_site);
 
-// A site's sensors read gain x the true impact factor (a calibration, known or fitted: README "Sensor
-// calibration"): divides each of the record's impact factors by its sensor's gain, so the fleet model
+// A site's sensors read gain x the true impact factor (a calibration, known or fitted: docs/sites.md):
+// divides each of the record's impact factors by its sensor's gain, so the fleet model
 // sees the true ones. Every gain must be positive; std::invalid_argument if the counts differ.
 void remove_sensor_gains(records::WimRecord& record, const Eigen::VectorXd& gains);
 

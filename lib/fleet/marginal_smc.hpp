@@ -1,4 +1,4 @@
-// Online fleet inference on the marginal core (DESIGN.md §4): each WIM record is one IBIS stage
+// Online fleet inference on the marginal core (docs/inference.md): each WIM record is one IBIS stage
 // over the 7 hyperparameters, its likelihood ℓ_n(θ) read from the table built when it arrives
 // (marginal_target.hpp). MCMC moves run only after a resampling, so move phases come a few times
 // per doubling of n and the cost per truck stays flat. When the posterior has moved away from the

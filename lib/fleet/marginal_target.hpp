@@ -1,4 +1,4 @@
-// The fleet posterior on the hyperparameters alone, π_n(θ) ∝ p(θ) Π_i ℓ_i(θ) (DESIGN.md §4), as
+// The fleet posterior on the hyperparameters alone, π_n(θ) ∝ p(θ) Π_i ℓ_i(θ) (docs/inference.md), as
 // a target for the generic tempered SMC engine. Each particle is one θ (7 numbers); the trucks'
 // latents are integrated out in their tables (model/truck_table.hpp), so a particle's state does
 // not grow with n and one θ move costs one pass over the tables, with no integrator call.
@@ -122,7 +122,7 @@ class MarginalTarget final : public smc::TemperedModel {
   };
 
   MarginalTarget(const site::Site& site, Options options) : MarginalTarget(std::vector<const site::Site*>{&site}, std::move(options)) {}
-  // One fleet over several sites (README "Many sites"): each truck's table is built through its own
+  // One fleet over several sites (docs/sites.md): each truck's table is built through its own
   // site (add_truck's `site`, an index into `sites`), θ is shared. The sites must outlive this.
   MarginalTarget(std::vector<const site::Site*> sites, Options options);
 
@@ -182,7 +182,7 @@ class MarginalTarget final : public smc::TemperedModel {
   long prebuilt_used() const { return prebuilt_used_; }
   int rebuilds() const { return rebuilds_; }
   // Wall seconds this rank spent building trucks' fits and tables (arrivals, prebuilds, rebuilds)
-  // in this process (not kept in checkpoints: for the scaling figures, README "Scale-out on MPI").
+  // in this process (not kept in checkpoints: for the scaling figures of docs/sites.md).
   double table_seconds() const { return table_seconds_; }
   // The state was read from a format whose truck records name no site (before version 3): the
   // records this build appends would not match the log's, so the whole log must be written anew.

@@ -3,7 +3,7 @@
 // absorb a record, rejuvenate after an offline replay, hand out the posterior, checkpoint. Two
 // cores implement it:
 //   marginal (default)  MarginalSmc: IBIS over θ with each truck's latents integrated out in a
-//                       table; cost per truck flat in n (DESIGN.md §4);
+//                       table; cost per truck flat in n (docs/inference.md);
 //   latent              FleetSmc: every truck's latents in every particle, older trucks re-swept
 //                       per truck (cost grows with n); needed for model extensions and for the
 //                       bounded-memory window mode.

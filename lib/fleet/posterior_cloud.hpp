@@ -1,5 +1,5 @@
 // What a fit leaves behind for prediction: weighted draws of the hyperparameters θ, the observed
-// trucks' speeds and sprung masses (the predictive draws v and m2 from them, DESIGN.md §5), and
+// trucks' speeds and sprung masses (the predictive draws v and m2 from them, docs/model.md), and
 // enough about the site to refuse a prediction that mixes up sites.
 #pragma once
 
@@ -10,7 +10,7 @@
 
 namespace ssrfleet::fleet {
 
-// One site of a fit over several sites (README "Many sites"): what the cloud's top-level site
+// One site of a fit over several sites (docs/sites.md): what the cloud's top-level site
 // fields hold for a fit of one site, and where its trucks sit in the cloud's speed and mass pool.
 struct CloudSite {
   std::string name;               // the manifest's name for it
@@ -22,9 +22,9 @@ struct CloudSite {
   std::size_t pool_begin = 0, pool_count = 0;  // speed_mps[pool_begin, pool_begin + pool_count)
 };
 
-// The sensor calibration one site's records were corrected with before the fit (README "Sensor
-// calibration"): sensor j read gain[j] x the true impact factor. `se` holds the gains' standard
-// errors when the fit estimated them (fit --calibrate); empty for a known calibration (a manifest's).
+// The sensor calibration one site's records were corrected with before the fit (docs/sites.md):
+// sensor j read gain[j] x the true impact factor. `se` holds the gains' standard errors when the
+// fit estimated them (fit --calibrate); empty for a known calibration (a manifest's).
 struct SiteCalibration {
   std::string site;  // the manifest's name for it
   std::vector<double> gain;

@@ -1,5 +1,5 @@
 // Summaries of posterior draws, one column per quantity: mean, sd and the 2.5 / 97.5 % quantiles
-// that the posterior-summary JSON reports (DESIGN.md §7). Works on equally weighted draws (an
+// that the posterior-summary JSON reports (docs/outputs.md). Works on equally weighted draws (an
 // MCMC chain) and on weighted ones (an SMC particle cloud) alike.
 #pragma once
 
@@ -37,7 +37,7 @@ std::vector<ParameterSummary> summarize_draws(const Eigen::Ref<const Eigen::Matr
 std::vector<ParameterSummary> summarise_weighted(const Eigen::Ref<const Eigen::MatrixXd>& draws_by_column,
                                                  const Eigen::Ref<const Eigen::ArrayXd>& weights);
 
-// The hyperparameter summary the posterior file reports (DESIGN.md §7): one entry per row of
+// The hyperparameter summary the posterior file reports (docs/outputs.md): one entry per row of
 // cloud.theta (kHyperCount, fleet_model.hpp order), weighted by cloud.weights. Computed here so
 // that io/posterior_json only formats it.
 std::vector<ParameterSummary> summarise_cloud(const PosteriorCloud& cloud);

@@ -1,4 +1,4 @@
-// The trucks of the posterior predictive (DESIGN.md §5), drawn once for every consumer of it:
+// The trucks of the posterior predictive (docs/model.md), drawn once for every consumer of it:
 // the SSR prediction (predict/), the damage along the road (damage/) and the SSR-corrected static
 // weights (weigh/). Draw θ from the weighted posterior, then per θ draw T trucks: (k, k_t, z) from
 // the fleet distribution θ describes, (v, m2) from the traffic. The caller simulates them through

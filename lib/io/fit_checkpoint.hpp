@@ -1,4 +1,4 @@
-// The checkpoint of `fit --checkpoint DIR` (README "Checkpoints of a fit"): a long offline fit, on
+// The checkpoint of `fit --checkpoint DIR` (docs/inference.md): a long offline fit, on
 // one process or on MPI ranks, that stops (a lost rank, a killed job, a full disk) resumes where
 // its last checkpoint left it, with the bits of a run that never stopped, on any number of ranks.
 // One file per class's fit, DIR/fit.SEED.ckpt (SEED: the class's own seed), replaced atomically:

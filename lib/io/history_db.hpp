@@ -1,6 +1,6 @@
 // The stream state's history: every checkpoint's report in an SQLite database (history.sqlite in
-// the state directory), so users can ask how the posterior and the SSR prediction evolved (README
-// "The stream's history" documents the schema and a query). A format: it stores and reads
+// the state directory), so users can ask how the posterior and the SSR prediction evolved
+// (docs/outputs.md documents the schema and a query). A format: it stores and reads
 // records::HistoryReport and computes nothing.
 //
 // Schema (version 1):

@@ -1,4 +1,4 @@
-// The posterior file: the summary of DESIGN.md §7 (per hyperparameter mean, sd, q025, q975;
+// The posterior file: the summary of docs/outputs.md (per hyperparameter mean, sd, q025, q975;
 // trucks seen, particles, ESS, log-evidence) followed by the weighted draws that `predict`
 // reads ("cloud"), and the identity of the site it was fitted on. This file only formats: the
 // summary is computed by fleet::summarise_cloud (fleet/posterior_summary.hpp).
@@ -18,7 +18,7 @@
 
 namespace ssrfleet::io {
 
-// What a posterior file may be (README "Input limits"). The default fit (1,024 particles, 10,000
+// What a posterior file may be (docs/outputs.md). The default fit (1,024 particles, 10,000
 // trucks in the pool) writes about 0.7 MB; 10^6 particles, about 150 MB. A larger file is refused
 // before a byte is parsed (a DataError naming the file and "size"), not read into memory.
 inline constexpr std::uintmax_t kMaxPosteriorBytes = std::uintmax_t{1} << 30;

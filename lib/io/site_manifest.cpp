@@ -139,7 +139,7 @@ SiteManifest read_site_manifest(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw MissingInputError("cannot open site manifest '" + path + "'");
   // The JSON is parsed whole, into a tree several times its size: a file far past any network's
-  // manifest (a site is about 100 bytes) is refused before a byte is parsed (README "Input limits").
+  // manifest (a site is about 100 bytes) is refused before a byte is parsed (docs/site-data.md).
   std::error_code ec;
   const auto bytes = fs::file_size(path, ec);
   if (!ec && bytes > kMaxSiteManifestBytes) {

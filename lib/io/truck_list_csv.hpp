@@ -1,4 +1,4 @@
-// The truck-list CSV of DESIGN.md §7, the input of a simulation with known trucks:
+// The truck-list CSV of docs/site-data.md, the input of a simulation with known trucks:
 // truck_id,speed_mps,sprung_mass_kg,k_npm,kt_npm,z_m ('#' comments, extra columns ignored), and an
 // optional `class` (the truck's vehicle class; written when any truck has one).
 #pragma once

@@ -1,4 +1,4 @@
-// The WIM-log CSV of DESIGN.md §7: header first, '#' lines are comments. Columns `truck_id`
+// The WIM-log CSV of docs/site-data.md: header first, '#' lines are comments. Columns `truck_id`
 // (unique), `time_s` (optional), `class` (optional: the truck's vehicle class, a label of
 // [A-Za-z0-9_.-]+, records/vehicle_class.hpp), `site` (a log of several sites: set_sites),
 // `speed_mps`, `sprung_mass_kg`, then either
@@ -82,7 +82,7 @@ class WimLogReader {
   // `class` (a stream whose classes were fixed when its state was made).
   void set_classes(std::set<std::string> classes) { classes_ = std::move(classes); }
 
-  // A log of several sites (a stream of a site manifest, README "Many sites"): the header must have a
+  // A log of several sites (a stream of a site manifest, docs/sites.md): the header must have a
   // `site` column, and at least as many value columns as the site with the most sensors. A record's
   // site names one of `sites` (WimRecord::site is its index); it fills its site's first M_s value
   // columns and leaves the rest empty; its truck id is kept as "SITE:ID", since ids are per site

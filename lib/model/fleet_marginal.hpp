@@ -1,4 +1,4 @@
-// The fleet model's per-truck marginal likelihood (DESIGN.md §4):
+// The fleet model's per-truck marginal likelihood (docs/inference.md):
 //   ℓ_i(θ) = ∫∫∫ p(y_i | k, k_t, z, σ_IF) N(k | K, σ_k²) N(k_t | K_t, σ_kt²) N_road(z | Z, σ_z²) dk dk_t dz,
 // the truck's latents integrated out, so the fleet posterior after n trucks is
 // π_n(θ) ∝ p(θ) Π_i ℓ_i(θ) on the 7 hyperparameters alone. The z integral is done when the
@@ -10,7 +10,7 @@
 // a_g and β_g are linear in the node's lattice index, so the node sum reads only the table.
 // Everything that depends on θ alone (not on the truck) is computed once per θ (ThetaTerms).
 //
-// Several sites, one fleet (README "Many sites"). A site enters ℓ_i only through its sensor count M
+// Several sites, one fleet (docs/sites.md). A site enters ℓ_i only through its sensor count M
 // and its lane [lo, hi] (P_road), both in the truck-independent part; everything else is in the
 // truck's table, built through the truck's own site. So one FleetMarginal serves trucks of many
 // sites: a constant per site (SiteConstants, ThetaTerms::site_constant), picked by the table's site.

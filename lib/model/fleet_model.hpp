@@ -1,11 +1,11 @@
-// The hierarchical fleet model of the paper (§3.1, eqs. (6)-(7)) and DESIGN.md §3, as plain
+// The hierarchical fleet model of the paper (§3.1, eqs. (6)-(7)) and docs/model.md, as plain
 // log-densities. Both samplers (the tempered SMC and the batch MCMC baseline) build on these;
 // nothing here knows how the posterior is explored.
 //
 //   IF°_nm ~ N(IF_n(x_m; k_n, kt_n, m2_n, z_n, v_n), sigma_IF^2)
 //   k_n ~ N(K, sigma_k^2),  kt_n ~ N(K_t, sigma_kt^2),  z_n ~ N(Z, sigma_z^2) truncated to the
 //   road surface [z_lo, z_hi] (a truck drives on the road; the simulator draws it that way),
-//   hyperparameters uniform over the ranges of DESIGN.md §3.
+//   hyperparameters uniform over the ranges of docs/model.md.
 #pragma once
 
 #include <array>

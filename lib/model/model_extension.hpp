@@ -1,4 +1,4 @@
-// A named extension of the fleet model (DESIGN.md §6): one physical effect the base quarter-car
+// A named extension of the fleet model (docs/model.md): one physical effect the base quarter-car
 // model leaves out, with its own parameters ψ and their uniform priors. The fleet target fits ψ
 // alongside θ and the trucks' latents (fleet_target.hpp); the simulator can switch the effect on
 // to make data in which it is hidden (simulator.hpp); `diagnose` scores each extension by
@@ -75,7 +75,7 @@ class ModelExtension {
  public:
   virtual ~ModelExtension() = default;
 
-  virtual std::string name() const = 0;         // canonical name (DESIGN.md §6)
+  virtual std::string name() const = 0;         // canonical name (docs/model.md)
   virtual std::string description() const = 0;  // one line for reports
   virtual const std::vector<ExtensionParameter>& parameters() const = 0;
   virtual std::vector<CheckKind> signature() const = 0;

@@ -1,7 +1,7 @@
 // A proposal for one truck's latents x = (k, k_t, z) given the fleet's θ, built from the truck's
 // table (truck_table.hpp): what the marginal core needs when something asks for latents after all
-// (DESIGN.md §4: "latents are drawn from p(x_i | y_i, θ) when something needs them"; the posterior
-// predictive checks of diagnose do).
+// (docs/inference.md: the marginal core keeps no latents and draws them from p(x_i | y_i, θ) only
+// when something needs them, as the posterior predictive checks of diagnose do).
 //
 // The node sum ℓ_i(θ) = C(θ) Σ_g exp(e_g) (FleetMarginal::entry_exponents) is the rectangle rule
 // for ∫ p(y | x) p(x | θ) dx, so entry g carries the share π_g ∝ exp(e_g) of the truck's latent

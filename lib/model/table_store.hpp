@@ -5,8 +5,8 @@
 //
 // The arena and the per-truck index live in the process's memory, or, given a directory, in
 // unnamed files there that the kernel pages (util/spill_vector.hpp): a stream's tables grow by
-// about 4.7 kB a truck, and in files they leave the process's private memory flat (README "Load
-// with bad records"). Append-only; a rebuild fills a new store.
+// about 4.7 kB a truck, and in files they leave the process's private memory flat
+// (docs/streaming.md). Append-only; a rebuild fills a new store.
 #pragma once
 
 #include <cstddef>

@@ -1,6 +1,6 @@
 // One truck's likelihood with its lateral position integrated out, tabulated on the (k, k_t)
-// lattice that every truck shares (DESIGN.md §4, "the marginal is the road to a per-truck cost
-// that does not grow with n"). Built once, by the quarter-car integrator, when the truck
+// lattice that every truck shares (docs/inference.md: the marginal is what keeps the per-truck
+// cost from growing with n). Built once, by the quarter-car integrator, when the truck
 // arrives; from then on the truck's marginal likelihood ℓ_i(θ) is a short sum over its nodes
 // (fleet_marginal.hpp), with no integrator call.
 //

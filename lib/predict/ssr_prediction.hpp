@@ -1,4 +1,4 @@
-// The SSR prediction of DESIGN.md §5: the posterior predictive distribution of impact factors
+// The SSR prediction (docs/model.md): the posterior predictive distribution of impact factors
 // along the road. Draw θ from the weighted posterior, trucks from the fleet distribution θ
 // describes (k, k_t, z), speed and sprung mass from the observed trucks (these draws are
 // fleet::draw_predictive_trucks, shared with damage and weigh), simulate, add N(0, σ_IF²).
@@ -54,7 +54,7 @@ SsrPrediction predict_ssr_mixture(const fleet::ClassPosteriors& classes, const s
                                   const site::Site& site, std::vector<double> positions_m,
                                   const PredictionOptions& options);
 
-// The CSV of DESIGN.md §7: position_m,mean_if,lower95,upper95,mean_lower95,mean_upper95.
+// The CSV of docs/outputs.md: position_m,mean_if,lower95,upper95,mean_lower95,mean_upper95.
 void write_prediction_csv(std::ostream& out, const SsrPrediction& prediction);
 
 }  // namespace ssrfleet::predict

@@ -1,5 +1,5 @@
 // One truck as a WIM site's raw tyre-force sensors logged it (the force_1..force_M form of the WIM
-// log, DESIGN.md §7) where the sprung mass may be absent: `ssrfleet weigh` estimates the static
+// log, docs/site-data.md) where the sprung mass may be absent: `ssrfleet weigh` estimates the static
 // weight from these forces. Plain data, no format: io/force_log reads and writes it.
 #pragma once
 

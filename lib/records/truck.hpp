@@ -1,7 +1,7 @@
 // One truck axle as the fleet model sees it (paper §3.1): what the WIM system measures (speed,
 // sprung mass) and what it does not (suspension stiffness k, tyre stiffness k_t, lateral
 // position z). The unsprung mass and suspension damping are the site's constants. A truck list
-// (DESIGN.md §7, the input of a simulation) is a std::vector<Truck>; io/truck_list_csv reads
+// (docs/site-data.md, the input of a simulation) is a std::vector<Truck>; io/truck_list_csv reads
 // and writes it. Plain data: no format, no model.
 #pragma once
 

@@ -1,4 +1,4 @@
-// One truck as a WIM site recorded it (DESIGN.md §7): plain data, no format. io/wim_log reads
+// One truck as a WIM site recorded it (docs/site-data.md): plain data, no format. io/wim_log reads
 // and writes it; the fleet model and the samplers consume it without knowing where it came from.
 #pragma once
 

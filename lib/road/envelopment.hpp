@@ -1,4 +1,4 @@
-// Tyre envelopment (DESIGN.md §1): a tyre bridges short, sharp features of the road, so the
+// Tyre envelopment (docs/model.md): a tyre bridges short, sharp features of the road, so the
 // input it passes to the axle is a smoothed profile. As in Cebon (1999, "Handbook of Vehicle-Road
 // Interaction", §3.3) we model it as a centred moving average of base length L along travel
 // (default 0.3 m; 0 = off).

@@ -1,4 +1,4 @@
-// The road roughness class of a displacement PSD level G_d(n0), n0 = 0.1 cycle/m (DESIGN.md §1).
+// The road roughness class of a displacement PSD level G_d(n0), n0 = 0.1 cycle/m (docs/model.md).
 // Two tables, each labelled wherever a class is reported, because they disagree by one class:
 //  - ISO 8608:1995 (the default; BS 7853:1996 is the same table): classes A..H, each a factor 4
 //    in G_d(n0), bounds 32, 128, 512, 2048, 8192, 32768, 131072 (x 1e-6 m^3); A is open below, H

@@ -1,4 +1,4 @@
-// A road surface ("carpet", DESIGN.md §1): heights on a regular grid, x along travel, y across.
+// A road surface ("carpet", docs/model.md): heights on a regular grid, x along travel, y across.
 // Column-major with one column per lateral line, so a line along travel is contiguous: the
 // integrator reads wheel paths straight out of it.
 #pragma once

@@ -1,4 +1,4 @@
-// The road-surface CSV of DESIGN.md §7:
+// The road-surface CSV of docs/site-data.md:
 //   x_m,<y0>,<y1>,...        header; each <y> a lateral position (m), evenly spaced, increasing
 //   <x>,<h0>,<h1>,...        one row per longitudinal sample; heights in metres
 // Lines starting with '#' (after optional blanks) and blank lines are skipped; cells may carry

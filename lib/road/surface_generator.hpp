@@ -1,4 +1,4 @@
-// Random isotropic road surfaces (DESIGN.md §1) by the method of Cebon & Newland (1984): a 2-D
+// Random isotropic road surfaces (docs/model.md) by the method of Cebon & Newland (1984): a 2-D
 // inverse FFT of amplitudes fixed by the spectrum with independent uniform random phases.
 //
 // Target: along any straight line the one-sided displacement PSD is the power law of

@@ -1,4 +1,4 @@
-// The named road surfaces of DESIGN.md §1: AS1, AS2 (G_d(n0) = 20e-6 m^3, seeds 1 and 2) and AS3
+// The named road surfaces of docs/model.md: AS1, AS2 (G_d(n0) = 20e-6 m^3, seeds 1 and 2) and AS3
 // (64e-6 m^3, seed 3), all with the default SurfaceSpec (100 m x 5 m at 0.05 m, w = 2,
 // n0 = 0.1 cycle/m, band 0.01-10 cycle/m).
 //

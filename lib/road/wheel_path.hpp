@@ -1,4 +1,4 @@
-// The wheel path at lateral position z (DESIGN.md §1): linear interpolation between the two
+// The wheel path at lateral position z (docs/model.md): linear interpolation between the two
 // nearest lateral lines. A position outside the surface is an error, never a clamp: a truck
 // driving off the measured carpet is a mistake in the inputs.
 #pragma once

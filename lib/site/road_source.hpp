@@ -1,5 +1,5 @@
 // Where a road surface comes from on the command line: a preset name (AS1, AS2, AS3) or the path
-// of a measured surface, a road CSV (DESIGN.md §7) or an ASAM OpenCRG file (.crg, any of its four
+// of a measured surface, a road CSV (docs/site-data.md) or an ASAM OpenCRG file (.crg, any of its four
 // data types), so a measured surface can stand in for a preset. The file's kind is read from its
 // content (road/road_format.hpp). An ERD file holds longitudinal profiles, not a surface: it is
 // refused here with a UsageError saying so (`ssrfleet road FILE.erd` reports its roughness).

@@ -6,7 +6,7 @@
 
 namespace ssrfleet::site {
 
-// The most sensors a site may have (README "Input limits"): an MS-WIM array has tens; a log of more
+// The most sensors a site may have (docs/site-data.md): an MS-WIM array has tens; a log of more
 // would not fit a CSV line's 100,000 fields, and 1e9 positions are 8 GB before anything checks them.
 inline constexpr int kMaxSensors = 10'000;
 

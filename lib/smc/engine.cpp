@@ -36,7 +36,7 @@ int TemperedSampler::Options::default_threads() {
 
 bool TemperedSampler::Options::IsValid(std::string* error) const {
   SMC_OPTION_RULE(particles >= 2, "particles must be >= 2");
-  // An absurd count fails here, before a cloud of it is allocated (README "Input limits").
+  // An absurd count fails here, before a cloud of it is allocated (docs/site-data.md).
   SMC_OPTION_RULE(particles <= kMaxParticles, "particles must be <= 10000000");
   SMC_OPTION_RULE(threads >= 1, "threads must be >= 1");
   SMC_OPTION_RULE(ess_rmin >= 0.0 && ess_rmin <= 1.0, "ess_rmin must be in [0, 1]");

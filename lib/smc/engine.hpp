@@ -70,7 +70,7 @@ class TemperedSampler {
   using ProgressCallback = std::function<void(const StageSummary& stage_so_far, const StepInfo& step)>;
 
   // The most particles a sampler takes: 7 hyperparameters x 1e7 particles is 560 MB before any
-  // truck; more is a typing error, refused before anything is allocated (README "Input limits").
+  // truck; more is a typing error, refused before anything is allocated (docs/site-data.md).
   static constexpr Eigen::Index kMaxParticles = 10'000'000;
 
   struct Options {

@@ -1,4 +1,4 @@
-// Online operation (DESIGN.md §4, issue "ssrfleet stream"): WIM records arrive one at a time,
+// Online operation (docs/streaming.md): WIM records arrive one at a time,
 // each good one is absorbed into the fleet posterior as one SMC stage, and the state directory
 // always holds a consistent posterior and a checkpoint to resume from.
 //
@@ -97,7 +97,7 @@ class WimStream {
   // tables (stdout in the command).
   WimStream(const site::Site& site, StreamOptions options, std::ostream* progress, std::ostream& reports)
       : WimStream(std::vector<StreamSite>{{"", &site, {}}}, std::move(options), progress, reports) {}
-  // A stream of several sites, one fleet (README "Many sites"): its input's `site` column names each
+  // A stream of several sites, one fleet (docs/sites.md): its input's `site` column names each
   // record's site (io::WimLogReader::set_sites); the sites must outlive the stream. The history's
   // predictions and the --report-every tables are at the first site; posterior.json holds every site
   // (predict --posterior DIR --sites M --site NAME predicts any of them).

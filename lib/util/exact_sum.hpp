@@ -3,7 +3,7 @@
 // grid values are added as 128-bit integers, which is associative. The fleet posterior's
 // Σ_i ℓ_i(θ) is one (model/fleet_marginal.hpp): whether one thread sums every truck, or four MPI
 // ranks each sum their own trucks and the partial sums are added in whatever order the network
-// delivers them, a seed gives the same bits (README "Scale-out on MPI").
+// delivers them, a seed gives the same bits (docs/sites.md).
 //
 // The grid, 2^-48 ≈ 3.6e-15, is finer than a double's own spacing for any |ℓ| of 16 or more, and
 // the rounding error per term (at most 1.8e-15) is nine orders below the single-precision node

@@ -6,7 +6,7 @@
 // naming the file and the line. It lives in util because the CSV reader of io and the road CSV of
 // road (which sits below io) both read lines this way.
 //
-// The limits of the text formats (README "Input limits") are here, in one place.
+// The limits of the text formats (docs/site-data.md) are here, in one place.
 #pragma once
 
 #include <cstddef>

@@ -1,4 +1,4 @@
-// The processes one fit runs on (README "Scale-out on MPI"), as the fleet layer sees them: a rank
+// The processes one fit runs on (docs/sites.md), as the fleet layer sees them: a rank
 // number, a count, and the three collective operations the marginal core needs. One process is
 // SingleRank (every operation a no-op); the MPI build's ssrfleet-mpi supplies another
 // (mpi/mpi_ranks.*), so nothing below bin/ includes mpi.h.

@@ -1,4 +1,4 @@
-// The pass integrator (DESIGN.md §2): exact discretisation with the profile linear between
+// The pass integrator (docs/model.md): exact discretisation with the profile linear between
 // samples, single truck and batched (structure of arrays, vectorised across trucks).
 //
 // Per step j -> j+1 the profile is r(x) = r_j + (r_{j+1} - r_j)(x - x_j)/dx, so the input

@@ -2,7 +2,7 @@
 // chosen longitudinal positions. The system is linear time-invariant per truck, so each step
 // uses the exact discretisation (matrix exponential) with the profile read as a continuous
 // surface, linear between samples (first-order hold): a staircase would shift the profile by
-// half a sample and bias IF by ~3e-3 at 5 cm spacing (DESIGN.md §2).
+// half a sample and bias IF by ~3e-3 at 5 cm spacing.
 //
 // The car starts at static equilibrium on the path's first sample (x = 0) and travels to the
 // last output position. An output position between two samples is reached by an exact partial

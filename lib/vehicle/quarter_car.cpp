@@ -1,4 +1,4 @@
-// The quarter-car equations of DESIGN.md §2 (the paper's eqs. (1)-(4), linear tyre, optional
+// The quarter-car equations (docs/model.md; the paper's eqs. (1)-(4), linear tyre, optional
 // tyre damping) written as a continuous state space.
 #include "vehicle/quarter_car.hpp"
 

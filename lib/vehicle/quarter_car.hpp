@@ -1,4 +1,4 @@
-// The quarter-car (one axle) of DESIGN.md §2 and the paper's equations (1)-(4), with the tyre
+// The quarter-car (one axle) of docs/model.md and the paper's equations (1)-(4), with the tyre
 // linear (the "^3" in the seed's eq. (3) is a text-extraction artefact) and an optional tyre
 // damping c_t (0 in the paper). Displacements y1 (axle), y2 (body) from static equilibrium,
 // upward positive:

@@ -17,7 +17,7 @@ enum : int { kShare = 0, kMean2, kSd2 };
 class SecondClass final : public ModelExtension {
  public:
   explicit SecondClass(const site::Site& /*site*/) {
-    // The class's stiffness prior is the base model's for K and σ_k (DESIGN.md §3). At share 0 the
+    // The class's stiffness prior is the base model's for K and σ_k (docs/model.md). At share 0 the
     // extension is the base model whatever K2 and σ_k2 are; their null values are Table 1's.
     const PriorBounds base;
     params_ = {{"share", "", 0.0, 0.5, 0.0},
