@@ -23,8 +23,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <map>
+#include <numbers>
 #include <numeric>
 #include <random>
 #include <sstream>
@@ -112,9 +114,48 @@ double assemble(const model::Lattice& lattice, const std::vector<NodeTerm>& term
   return 0.5 * sensors * (d.log_u - fleet::kLog2Pi) + std::log(lattice.dk_npm * lattice.dkt_npm) + s;
 }
 
-enum Component { kTab, kDouble, kLaplaceOnly, kKeptExact, kLatticeExact, kExact, kComponents };
-const char* kSourceNames[] = {"total", "rectangle", "dropping", "laplace+window", "lateral", "float"};
-constexpr int kSources = 6;
+// log of N(x | mean, sd²)'s mass on [x - h/2, x + h/2] per unit length.
+double log_cell_density(double x, double h, double mean, double sd) {
+  const double a = (x - 0.5 * h - mean) / (sd * std::numbers::sqrt2), b = (x + 0.5 * h - mean) / (sd * std::numbers::sqrt2);
+  double mass;
+  if (a > 0.0) mass = 0.5 * (std::erfc(a) - std::erfc(b));
+  else if (b < 0.0) mass = 0.5 * (std::erfc(-b) - std::erfc(-a));
+  else mass = 0.5 * (std::erf(b) - std::erf(a));
+  if (mass > 0.0) return std::log(mass / h);
+  return fleet::log_normal_density(x, mean, sd);  // far tail: the cell's mass underflows
+}
+
+// The same node sum where a fleet sd below FleetMarginal's floor is not floored: in that direction
+// each node's prior weight is the fleet density's mass on the node's cell (exact where the
+// likelihood is flat across a cell, as it is when the fleet sd, not the likelihood, is narrow);
+// above the floor the point density, as now (the cell mass would err by ~ (spacing / width)² / 24).
+double assemble_cells(const model::Lattice& lattice, const std::vector<NodeTerm>& terms, const Draw& d, int sensors) {
+  const fleet::HyperVector& t = d.theta;
+  double s = kNegInf;
+  for (const NodeTerm& n : terms) {
+    const double k = lattice.k_at(n.ij.first), kt = lattice.kt_at(n.ij.second);
+    const double sk = t[fleet::kSigmaK], skt = t[fleet::kSigmaKt];
+    const double floor = model::FleetMarginal::kMinSdPerSpacing;
+    const double pk = sk < floor * lattice.dk_npm ? log_cell_density(k, lattice.dk_npm, t[fleet::kK], sk)
+                                                  : fleet::log_normal_density(k, t[fleet::kK], sk);
+    const double pkt = skt < floor * lattice.dkt_npm ? log_cell_density(kt, lattice.dkt_npm, t[fleet::kKt], skt)
+                                                     : fleet::log_normal_density(kt, t[fleet::kKt], skt);
+    s = log_add(s, pk + pkt + n.y);
+  }
+  return 0.5 * sensors * (d.log_u - fleet::kLog2Pi) + std::log(lattice.dk_npm * lattice.dkt_npm) + s;
+}
+
+enum Component { kTab, kDouble, kLaplaceOnly, kKeptExact, kLatticeExact, kExact, kLatticeUnfloored, kLatticeCells, kComponents };
+const char* kSourceNames[] = {"total",
+                              "rectangle (+floor)",
+                              "dropping",
+                              "laplace+window",
+                              "lateral",
+                              "float",
+                              "z-integral (laplace+window+lateral)",
+                              "  rectangle, no floor",
+                              "  rectangle, cell mass below the floor"};
+constexpr int kSources = 9;
 // Source s of one truck at one draw, from its six likelihoods.
 double source(const std::array<double, kComponents>& l, int s) {
   switch (s) {
@@ -123,7 +164,10 @@ double source(const std::array<double, kComponents>& l, int s) {
     case 2: return l[kKeptExact] - l[kLatticeExact];
     case 3: return l[kLaplaceOnly] - l[kKeptExact];
     case 4: return l[kDouble] - l[kLaplaceOnly];
-    default: return l[kTab] - l[kDouble];
+    case 5: return l[kTab] - l[kDouble];
+    case 6: return l[kDouble] - l[kKeptExact];
+    case 7: return l[kLatticeUnfloored] - l[kExact];
+    default: return l[kLatticeCells] - l[kExact];
   }
 }
 
@@ -174,10 +218,11 @@ std::string fmt_g(double x) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string case_name = "a", configs_arg = "default";
+  std::string case_name = "a", configs_arg = "default", dump_prefix;
   int trucks = 1000, D = 50, m = 30, threads = 2, refine = 2, check_trucks = 3, particles = 1024;
   std::uint64_t data_seed = 1, smc_seed = 11, pick_seed = 5;
   double threshold = 25.0;
+  double sigma_if_override = 0.0, sigma_z_override = 0.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
@@ -193,14 +238,27 @@ int main(int argc, char** argv) {
     else if (a == "--smc-seed") smc_seed = std::stoull(next());
     else if (a == "--configs") configs_arg = next();
     else if (a == "--threshold") threshold = std::stod(next());
+    else if (a == "--sigma-if") sigma_if_override = std::stod(next());
+    else if (a == "--sigma-z") sigma_z_override = std::stod(next());
+    else if (a == "--dump") dump_prefix = next();
     else {
       std::cerr << "usage: table_error_benchmark --case a|b|c [--trucks N] [--draws D] [--subset m] [--threads T]\n"
                    "  [--configs default,piece12,piece24,lattice07,keep16,sigtol02,sigtol01,pts20] [--refine r]\n"
-                   "  [--check-trucks k] [--particles P] [--data-seed s] [--smc-seed s] [--threshold nats]\n";
+                   "  [--check-trucks k] [--particles P] [--data-seed s] [--smc-seed s] [--threshold nats]\n"
+                   "  [--sigma-if s] [--sigma-z s] [--dump prefix]\n";
       return 2;
     }
   }
-  const bench::FleetPreset preset = preset_for_case(case_name);
+  bench::FleetPreset preset = preset_for_case(case_name);
+  // Variants of a case: more noise (broader z-likelihoods) or another lateral spread.
+  if (sigma_if_override > 0.0) {
+    preset.sigma_if = sigma_if_override;
+    preset.description += ", sigma_IF " + fmt_g(sigma_if_override);
+  }
+  if (sigma_z_override > 0.0) {
+    preset.distribution.lateral_m.sd = sigma_z_override;
+    preset.description += ", sigma_z " + fmt_g(sigma_z_override);
+  }
   const site::Site site(site::load_road(preset.road), site::SiteOptions{});
   const double lo = site.lateral_min_m(), hi = site.lateral_max_m();
   const fleet::SimulatedLog log = bench::simulate_preset(site, preset, trucks, data_seed);
@@ -352,11 +410,28 @@ int main(int argc, char** argv) {
         out[kLaplaceOnly] = assemble(lattice, lap, dr, M, true);
         out[kKeptExact] = assemble(lattice, kept_exact, dr, M, true);
         out[kLatticeExact] = assemble(lattice, all_exact, dr, M, true);
+        out[kLatticeUnfloored] = assemble(lattice, all_exact, dr, M, false);
+        out[kLatticeCells] = assemble_cells(lattice, all_exact, dr, M);
       }
       std::cerr << "  truck " << i << ": " << view.nodes << " entries, " << by_node.size() << " nodes, " << on_lattice.size()
                 << " lattice nodes; tab-exact at the mean " << fmt_g(l[s][DD - 1][kTab] - l[s][DD - 1][kExact]) << "\n";
     }
     const double ref_s = seconds_since(t1);
+    if (!dump_prefix.empty()) {
+      // Every truck's six likelihoods at every draw (the last draw is the posterior mean).
+      std::ofstream dump(dump_prefix + "-" + config + ".csv");
+      dump << "truck,draw";
+      for (int h = 0; h < fleet::kHyperCount; ++h) dump << "," << fleet::kHyperNames[h];
+      dump << ",tab,dbl,laplace_only,kept_exact,lattice_exact,exact,lattice_unfloored,lattice_cells\n";
+      dump.precision(17);
+      for (std::size_t s = 0; s < subset.size(); ++s)
+        for (std::size_t d = 0; d < DD; ++d) {
+          dump << subset[s] << "," << d;
+          for (int h = 0; h < fleet::kHyperCount; ++h) dump << "," << draws[d].theta[static_cast<std::size_t>(h)];
+          for (int c = 0; c < kComponents; ++c) dump << "," << l[s][d][static_cast<std::size_t>(c)];
+          dump << "\n";
+        }
+    }
 
     // Statistics over draws d < D.
     auto spread_of = [&](const std::vector<std::size_t>& trucks_used, int src, std::vector<double>* e_out) {
@@ -383,6 +458,36 @@ int main(int argc, char** argv) {
       }
       return sh;
     };
+    // The trucks whose error varies most over the draws (total; lateral).
+    {
+      std::vector<std::pair<double, std::size_t>> per;
+      for (std::size_t s = 0; s < subset.size(); ++s) {
+        double a = 1e300, b = -1e300;
+        for (int d = 0; d < D; ++d) {
+          const double e = source(l[s][static_cast<std::size_t>(d)], 0);
+          a = std::min(a, e);
+          b = std::max(b, e);
+        }
+        per.emplace_back(b - a, s);
+      }
+      std::sort(per.rbegin(), per.rend());
+      std::cout << "per-truck max-min over draws (nats), largest: ";
+      for (std::size_t k = 0; k < std::min<std::size_t>(5, per.size()); ++k)
+        std::cout << (k ? ", " : "") << "truck " << subset[per[k].second] << " " << fmt_g(per[k].first);
+      double med = per[per.size() / 2].first;
+      std::cout << "; median " << fmt_g(med) << "\n";
+    }
+    {
+      int below = 0;
+      for (int d = 0; d < D; ++d) {
+        const fleet::HyperVector& t = draws[static_cast<std::size_t>(d)].theta;
+        if (t[fleet::kSigmaK] < model::FleetMarginal::kMinSdPerSpacing * lattice.dk_npm ||
+            t[fleet::kSigmaKt] < model::FleetMarginal::kMinSdPerSpacing * lattice.dkt_npm)
+          ++below;
+      }
+      std::cout << "draws with a fleet sd below FleetMarginal's floor (0.8 spacings: " << fmt_g(0.8 * lattice.dk_npm) << ", "
+                << fmt_g(0.8 * lattice.dkt_npm) << " N/m): " << below << " of " << D << "\n";
+    }
     std::vector<std::size_t> all_s(subset.size());
     std::iota(all_s.begin(), all_s.end(), std::size_t{0});
     constexpr int kBoot = 400;
