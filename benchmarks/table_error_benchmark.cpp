@@ -145,7 +145,19 @@ double assemble_cells(const model::Lattice& lattice, const std::vector<NodeTerm>
   return 0.5 * sensors * (d.log_u - fleet::kLog2Pi) + std::log(lattice.dk_npm * lattice.dkt_npm) + s;
 }
 
-enum Component { kTab, kDouble, kLaplaceOnly, kKeptExact, kLatticeExact, kExact, kLatticeUnfloored, kLatticeCells, kComponents };
+enum Component {
+  kTab,
+  kDouble,
+  kLaplaceOnly,
+  kKeptExact,
+  kLatticeExact,
+  kExact,
+  kLatticeUnfloored,
+  kLatticeCells,
+  kMomentsAtU,
+  kMomentsFirstOrder,
+  kComponents
+};
 const char* kSourceNames[] = {"total",
                               "rectangle (+floor)",
                               "dropping",
@@ -154,8 +166,10 @@ const char* kSourceNames[] = {"total",
                               "float",
                               "z-integral (laplace+window+lateral)",
                               "  rectangle, no floor",
-                              "  rectangle, cell mass below the floor"};
-constexpr int kSources = 9;
+                              "  rectangle, cell mass below the floor",
+                              "  lateral, one-piece nodes' z-moments at the draw's u",
+                              "  lateral, one-piece nodes' z-moments first order in u"};
+constexpr int kSources = 11;
 // Source s of one truck at one draw, from its six likelihoods.
 double source(const std::array<double, kComponents>& l, int s) {
   switch (s) {
@@ -167,7 +181,10 @@ double source(const std::array<double, kComponents>& l, int s) {
     case 5: return l[kTab] - l[kDouble];
     case 6: return l[kDouble] - l[kKeptExact];
     case 7: return l[kLatticeUnfloored] - l[kExact];
-    default: return l[kLatticeCells] - l[kExact];
+    case 8: return l[kLatticeCells] - l[kExact];
+    // The lateral source with the table's lateral form replaced (kDouble -> the variant).
+    case 9: return l[kMomentsAtU] - l[kLaplaceOnly];
+    default: return l[kMomentsFirstOrder] - l[kLaplaceOnly];
   }
 }
 
@@ -335,7 +352,7 @@ int main(int argc, char** argv) {
       std::vector<std::pair<int, int>> kept;
       for (const auto& [ij, e] : by_node) kept.push_back(ij);
       // Every node of the table's lattice (the kept ones among them), z exact.
-      const TruckReference::NodeMap on_lattice = ref.flood(lattice, kept, threshold, true, true);
+      const TruckReference::NodeMap on_lattice = ref.flood(lattice, kept, threshold, true, true, view.u_ref);
       if (first) {
         std::vector<std::pair<int, int>> seeds;
         for (const auto& ij : kept) seeds.emplace_back(refine * ij.first, refine * ij.second);
@@ -388,7 +405,12 @@ int main(int argc, char** argv) {
         out[kExact] = exact[s][d];
         out[kTab] = marginal.log_likelihood(view, marginal.prepare(t));
         const double sz2 = t[fleet::kSigmaZ] * t[fleet::kSigmaZ];
-        std::vector<NodeTerm> dbl, lap, kept_exact, all_exact;
+        std::vector<NodeTerm> dbl, lap, kept_exact, all_exact, at_u, first_order;
+        // The Gaussian lateral form, exactly (no expansion in ε).
+        auto gaussian_lateral = [&](double z_mean, double z_var) {
+          const double v = sz2 + z_var, dz = z_mean - t[fleet::kZ];
+          return -0.5 * (fleet::kLog2Pi + std::log(v)) - dz * dz / (2.0 * v) - dr.log_mass;
+        };
         for (const auto& [ij, entries] : by_node) {
           const auto& v = on_lattice.at(ij);
           double y_d = kNegInf, y_l = kNegInf;
@@ -402,6 +424,15 @@ int main(int argc, char** argv) {
             y_l = log_add(y_l, laplace);
           }
           dbl.push_back({ij, y_d});
+          if (entries.size() == 1) {
+            const double du = dr.u - view.u_ref;
+            at_u.push_back({ij, y_l + gaussian_lateral(v.z_mean[d], v.z_var[d])});
+            first_order.push_back(
+                {ij, y_l + gaussian_lateral(v.z_mean_ref + du * v.dz_mean_du, std::max(0.0, v.z_var_ref + du * v.dz_var_du))});
+          } else {
+            at_u.push_back({ij, y_d});
+            first_order.push_back({ij, y_d});
+          }
           lap.push_back({ij, y_l + v.x[d] - v.x0[d]});
           kept_exact.push_back({ij, v.x[d]});
         }
@@ -412,6 +443,8 @@ int main(int argc, char** argv) {
         out[kLatticeExact] = assemble(lattice, all_exact, dr, M, true);
         out[kLatticeUnfloored] = assemble(lattice, all_exact, dr, M, false);
         out[kLatticeCells] = assemble_cells(lattice, all_exact, dr, M);
+        out[kMomentsAtU] = assemble(lattice, at_u, dr, M, true);
+        out[kMomentsFirstOrder] = assemble(lattice, first_order, dr, M, true);
       }
       std::cerr << "  truck " << i << ": " << view.nodes << " entries, " << by_node.size() << " nodes, " << on_lattice.size()
                 << " lattice nodes; tab-exact at the mean " << fmt_g(l[s][DD - 1][kTab] - l[s][DD - 1][kExact]) << "\n";
@@ -422,7 +455,8 @@ int main(int argc, char** argv) {
       std::ofstream dump(dump_prefix + "-" + config + ".csv");
       dump << "truck,draw";
       for (int h = 0; h < fleet::kHyperCount; ++h) dump << "," << fleet::kHyperNames[h];
-      dump << ",tab,dbl,laplace_only,kept_exact,lattice_exact,exact,lattice_unfloored,lattice_cells\n";
+      dump << ",tab,dbl,laplace_only,kept_exact,lattice_exact,exact,lattice_unfloored,lattice_cells,moments_at_u,"
+              "moments_first_order\n";
       dump.precision(17);
       for (std::size_t s = 0; s < subset.size(); ++s)
         for (std::size_t d = 0; d < DD; ++d) {

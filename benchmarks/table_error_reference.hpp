@@ -112,6 +112,10 @@ class TruckReference {
  public:
   struct NodeValues {
     std::vector<double> x, x0;
+    // With moments: the node's z-posterior mean and variance without the lateral prior, whole road,
+    // at each draw's u; and at u_ref with their u-derivatives (what a table could store per entry).
+    std::vector<double> z_mean, z_var;
+    double z_mean_ref = 0.0, z_var_ref = 0.0, dz_mean_du = 0.0, dz_var_du = 0.0;
   };
 
   TruckReference(const site::Site& site, double speed_mps, double mass_kg, Eigen::VectorXd y,
@@ -122,7 +126,9 @@ class TruckReference {
   long long passes() const { return passes_; }
 
   // Node values at (k[i], kt[i]).
-  std::vector<NodeValues> evaluate(const std::vector<double>& k, const std::vector<double>& kt, bool with_x0) {
+  // u_ref > 0: also the z-moments (NodeValues), by differences of the log-integral tilted by exp(t z).
+  std::vector<NodeValues> evaluate(const std::vector<double>& k, const std::vector<double>& kt, bool with_x0,
+                                   double u_ref = 0.0) {
     const road::Surface& surface = site_.surface();
     const Eigen::Index L = surface.lines();
     const Eigen::ArrayXXd ifs = model::detail::simulate_on_lines(site_, speed_, mass_, k, kt, lines_, parallel_);
@@ -159,6 +165,35 @@ class TruckReference {
           v.x[d] = x + log_dy - 0.5 * (fleet::kLog2Pi + std::log(sz * sz)) - dr.log_mass;
           if (with_x0) v.x0[d] = x0 + log_dy;
         }
+        if (u_ref > 0.0) {
+          // F(t) = log ∫ exp(-u SSR / 2 + t z) dz: F'(0) = E[z], F''(0) = Var[z].
+          auto tilted = [&](double u, double t) {
+            double f = kNegInf;
+            for (std::size_t j = 0; j < aa.size(); ++j) {
+              const double z0 = surface.lateral_m(static_cast<Eigen::Index>(j));
+              f = log_add(f, log_segment_integral(u * dd[j], u * ad[j] + t * dy, u * aa[j] - 2.0 * t * z0));
+            }
+            return f;
+          };
+          auto moments = [&](double u) {
+            constexpr double h = 0.1;
+            const double fm = tilted(u, -h), f0 = tilted(u, 0.0), fp = tilted(u, h);
+            return std::pair{(fp - fm) / (2.0 * h), (fp - 2.0 * f0 + fm) / (h * h)};
+          };
+          for (const Draw& dr : draws_) {
+            const auto [mean, var] = moments(dr.u);
+            v.z_mean.push_back(mean);
+            v.z_var.push_back(var);
+          }
+          const double du = 0.01 * u_ref;
+          const auto [m0, v0] = moments(u_ref);
+          const auto [m1, v1] = moments(u_ref + du);
+          const auto [m2, v2] = moments(u_ref - du);
+          v.z_mean_ref = m0;
+          v.z_var_ref = v0;
+          v.dz_mean_du = (m1 - m2) / (2.0 * du);
+          v.dz_var_du = (v1 - v2) / (2.0 * du);
+        }
       }
     });
     return out;
@@ -169,7 +204,7 @@ class TruckReference {
   // (as the tables do on their own lattice).
   using NodeMap = std::map<std::pair<int, int>, NodeValues>;
   NodeMap flood(const model::Lattice& lattice, std::vector<std::pair<int, int>> seeds, double threshold_nats,
-                bool floor_sd, bool with_x0) {
+                bool floor_sd, bool with_x0, double u_ref = 0.0) {
     NodeMap nodes;
     std::vector<double> best(draws_.size(), kNegInf);
     auto admissible = [&](int i, int j) { return lattice.k_at(i) > 0.0 && lattice.kt_at(j) > 0.0; };
@@ -186,7 +221,7 @@ class TruckReference {
         k.push_back(lattice.k_at(i));
         kt.push_back(lattice.kt_at(j));
       }
-      std::vector<NodeValues> values = evaluate(k, kt, with_x0);
+      std::vector<NodeValues> values = evaluate(k, kt, with_x0, u_ref);
       for (std::size_t p = 0; p < pending.size(); ++p) {
         for (std::size_t d = 0; d < draws_.size(); ++d) best[d] = std::max(best[d], score(pending[p], values[p], d));
         nodes[pending[p]] = std::move(values[p]);
