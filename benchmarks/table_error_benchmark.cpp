@@ -13,7 +13,10 @@
 //               z-window: the reference integrates the whole road)
 //   lateral     the table's moment matching of N(z | Z, σ_z²) (per node or piece), in double
 //   float       the single-precision node sum of FleetMarginal against the same formula in double
-// The components add up to the total. Uncertainty from the truck subset: a bootstrap over trucks.
+// The components add up to the total. Rows after them try remedies on the same nodes: the rectangle
+// rule without the floor or with cell masses below it, and the lateral form with each one-piece
+// node's z-moments at the draw's σ_IF (exactly, or first order in u from u_ref as a table could
+// store them). Uncertainty from the truck subset: a bootstrap over trucks.
 // Each configuration (a knob of MarginalTarget::Options) is a fit of its own (its cost: integrator
 // passes, entries and table time per truck) evaluated at the default fit's draws and subset.
 //
