@@ -149,7 +149,7 @@ std::string write_holed_as1(const test::TempDir& dir) {
 
 }  // namespace
 
-TEST_CASE("road summarises an OpenCRG road whose wheel path crosses holes; driving over them is refused",
+TEST_CASE("road summarises an OpenCRG road whose wheel path crosses holes, and driving over them is refused",
           "[cli][crg]") {
   test::TempDir dir;
   const std::string crg = write_holed_as1(dir);
