@@ -125,8 +125,8 @@ int run_stream(int argc, const char* const argv[]) {
       throw UsageError("--model " + model.text + " needs the exact latent core: a truck that left the --window cannot "
                        "be re-simulated at new effect parameters");
     }
-    options.fit.core = fleet::OnlineFitOptions::Core::kLatent;
-    options.fit.latent.extension = model.extension.get();
+    options.fit.core = fleet::OnlineFitOptions::default_core(model.extension.get());
+    options.fit.extension = model.extension.get();
   }
   options.fit.sampler().particles = particles;
   options.fit.sampler().threads = threads > 0 ? threads : smc::TemperedSampler::Options::default_threads();

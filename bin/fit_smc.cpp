@@ -75,14 +75,14 @@ fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t 
     throw UsageError("--core must be marginal or latent, not '" + flags.core + "'");
   }
   if (extension != nullptr) {
-    // The marginal core's tables integrate each truck's latents out for the base model's forward
-    // model; effects ride in the particles of the latent core.
-    if (flags.core_given && flags.core == "marginal") {
-      throw UsageError("--model " + extension->name() + ": the marginal core fits the base model only; effects need "
-                       "--core latent (the default with --model) or --method mcmc");
+    // The marginal core's tables hold the base model's forward model: it carries an effect that
+    // changes the fleet's stiffness distribution alone; the others ride in the latent core's particles.
+    if (flags.core_given && flags.core == "marginal" && !fleet::OnlineFitOptions::marginal_carries(extension)) {
+      throw UsageError("--model " + extension->name() + ": the marginal core's tables hold the base model's forward "
+                       "model, which this effect changes; fit it with --core latent (the default for it) or --method mcmc");
     }
-    o.core = fleet::OnlineFitOptions::Core::kLatent;
-    o.latent.extension = extension;
+    if (!flags.core_given) o.core = fleet::OnlineFitOptions::default_core(extension);
+    o.extension = extension;
   }
   // Under mpirun (ssrfleet-mpi) the ranks share the marginal core's trucks; the latent core keeps
   // every truck's latents in every particle and runs on one process.

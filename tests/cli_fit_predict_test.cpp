@@ -1,5 +1,7 @@
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include <catch2/catch.hpp>
@@ -170,6 +172,23 @@ TEST_CASE("fit --model refuses a bad spec or the marginal core, listing the cata
   CHECK(bad.err.find("  tyre_damping: ") != std::string::npos);  // the catalogue
   const auto marginal = run_ssrfleet("fit " + q(log) + " --model tyre_damping --core marginal --out " + q(out), dir);
   CHECK(marginal.status != 0);
-  CHECK(marginal.err.find("the marginal core fits the base model only") != std::string::npos);
+  CHECK(marginal.err.find("the marginal core's tables hold the base model's forward model") != std::string::npos);
+  CHECK(marginal.err.find("--core latent") != std::string::npos);
   CHECK(!std::filesystem::exists(out));
+}
+
+TEST_CASE("fit --model second_class runs on the marginal core and writes its psi", "[cli][extension]") {
+  test::TempDir dir;
+  const std::string log = dir.file("log.csv");
+  REQUIRE(run_ssrfleet("simulate --trucks 12 --seed 3 --quiet --out " + q(log), dir).status == 0);
+  const auto out = dir.file("p.json");
+  const auto fit = run_ssrfleet("fit " + q(log) + " --model second_class --particles 128 --out " + q(out), dir);
+  INFO(fit.err);
+  REQUIRE(fit.status == 0);
+  std::ifstream in(out);
+  const std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  CHECK(fit.err.find("(marginal core)") != std::string::npos);
+  CHECK(json.find("\"psi\"") != std::string::npos);
+  CHECK(json.find("\"model\": \"second_class\"") != std::string::npos);
+  CHECK(json.find("\"sigma_k2\"") != std::string::npos);
 }

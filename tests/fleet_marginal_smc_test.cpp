@@ -156,19 +156,20 @@ TEST_CASE("tables prebuilt one truck per thread give the bits of tables built on
   CHECK(resumed.target().integrator_passes() == replayed->target().integrator_passes());
 }
 
-TEST_CASE("a marginal target of format 1 (before frozen table options) or 2 (before sites) is migrated and "
-          "resumes exactly",
+TEST_CASE("a marginal target of format 1 (before frozen table options), 2 (before sites) or 3 (before models) is "
+          "migrated and resumes exactly",
           "[marginal]") {
   Case c(20, 3);
   fleet::MarginalSmc straight(c.site, options(64, 2, 4));
   for (const auto& r : c.log.records) straight.absorb(r);
 
-  for (const std::uint32_t old_version : {1u, 2u}) {
+  for (const std::uint32_t old_version : {1u, 2u, 3u}) {
     INFO("format " << old_version);
-    // After its first truck a core has no frozen options. Its format-2 bytes are format 3's with the
-    // version changed and no site index (4 bytes: 0) at the start of the truck record, right after
-    // the truck's id; format 1's are format 2's without the flag byte (0: none frozen) after the
-    // pass count.
+    // After its first truck a core has no frozen options. Its format-3 bytes are format 4's without
+    // the model (an empty name: its 8-byte length 0) and ψ (a 0 x 64 matrix: two 8-byte sizes)
+    // just before the truck count; format 2's are format 3's with no site index (4 bytes: 0) at the
+    // start of the truck record, right after the truck's id; format 1's are format 2's without the
+    // flag byte (0: none frozen) after the pass count.
     fleet::MarginalSmc first(c.site, options(64, 2, 4));
     first.absorb(c.log.records[0]);
     std::string bytes = bytes_of(first);
@@ -177,7 +178,7 @@ TEST_CASE("a marginal target of format 1 (before frozen table options) or 2 (bef
     REQUIRE(at != std::string::npos);
     std::uint32_t version = 0;
     std::memcpy(&version, bytes.data() + at + 8, sizeof version);
-    REQUIRE(version == 3);
+    REQUIRE(version == 4);
     // magic, version, lattice, σ_ref, two absent populations' flags, last rebuild, rebuilds, passes.
     const std::size_t flag = at + 8 + 4 + sizeof(model::Lattice) + 8 + 1 + 1 + 8 + 4 + 8;
     REQUIRE(bytes[flag] == 0);
@@ -185,7 +186,15 @@ TEST_CASE("a marginal target of format 1 (before frozen table options) or 2 (bef
     const std::size_t id_at = bytes.find(id, flag);
     REQUIRE(id_at != std::string::npos);
     REQUIRE(bytes.substr(id_at + id.size(), 4) == std::string(4, '\0'));
-    bytes.erase(id_at + id.size(), 4);
+    // The base model's name and ψ, then the truck count (1): zeros, 0 rows, 64 columns, 1.
+    std::string model_and_count(16, '\0');
+    for (const std::int64_t v : {std::int64_t{64}, std::int64_t{1}})
+      model_and_count.append(reinterpret_cast<const char*>(&v), sizeof v);
+    const std::size_t model_at = bytes.find(model_and_count, flag);
+    REQUIRE(model_at != std::string::npos);
+    REQUIRE(model_at < id_at);
+    if (old_version <= 2) bytes.erase(id_at + id.size(), 4);
+    bytes.erase(model_at, 24);
     if (old_version == 1) bytes.erase(flag, 1);
     std::memcpy(bytes.data() + at + 8, &old_version, sizeof old_version);
     // The one truck record's seal covers everything before it: seal the edited bytes again.
@@ -195,9 +204,11 @@ TEST_CASE("a marginal target of format 1 (before frozen table options) or 2 (bef
 
     fleet::MarginalSmc resumed(c.site, options(64, 2, 4));
     restore_from(resumed, bytes);
-    CHECK(resumed.target().read_old_truck_records());
-    // Its truck log must be written anew, not appended to: a generation of its own.
-    CHECK(resumed.table_generation() == first.table_generation() + fleet::MarginalSmc::kMigratedGeneration);
+    // A format before sites: its truck log must be written anew, not appended to (a generation of
+    // its own); format 3's truck records are this build's.
+    CHECK(resumed.target().read_old_truck_records() == (old_version <= 2));
+    CHECK(resumed.table_generation() ==
+          first.table_generation() + (old_version <= 2 ? fleet::MarginalSmc::kMigratedGeneration : 0));
     for (std::size_t t = 1; t < c.log.records.size(); ++t) resumed.absorb(c.log.records[t]);
     CHECK(bytes_of(resumed) == bytes_of(straight));
   }

@@ -81,8 +81,8 @@ TEST_CASE("predict keeps a fitted road defect on its road and only there", "[pre
 }
 
 TEST_CASE("predict draws the stiffness from a replaced distribution", "[predict][extension]") {
-  // A second class with no share is the base fleet (to rounding: the normal quantile is taken
-  // without the base model's truncation at zero, 10 sd away).
+  // A second class with no share is the base fleet (to rounding: the class's normal is drawn through
+  // the mixture's code path, with the same truncation at zero).
   const auto none = predict_on(cloud_with("second_class", {0.0, 900e3, 50e3}));
   CHECK(worst(none, predict_on(cloud_with("base", {}))) < 1e-9);
   // Half the trucks much stiffer: another pattern.

@@ -52,7 +52,7 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
   so.sampler().particles = o.particles;
   so.sampler().threads = o.threads;
   so.sampler().seed = o.seed;
-  so.latent.extension = f.extension.get();
+  so.extension = f.extension.get();
   so.latent.proposals = f.extension ? proposals : nullptr;
   f.online = fleet::make_online_fit(site, so);
   const std::string label = f.extension ? f.extension->name() : std::string("base model");

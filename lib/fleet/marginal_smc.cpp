@@ -18,13 +18,33 @@ MarginalTarget::Options with_particles(MarginalTarget::Options t, Eigen::Index p
   return t;
 }
 constexpr std::uint64_t kInitialDraws = 0;
+
+// An extension's jump between distant modes of the stiffness distribution (MarginalTarget's model
+// move) runs in every sweep, after the block moves.
+smc::TemperedSampler::Options with_model_moves(smc::TemperedSampler::Options s, const ModelExtension* extension) {
+  if (extension != nullptr && extension->stiffness_jump_draws() > 0) {
+    smc::ScheduledMove jump;
+    jump.kind = smc::MoveKind::kModel;
+    jump.model_move = "stiffness jump";
+    s.schedule.sweep.push_back(jump);
+  }
+  return s;
+}
+
+// The extension's name and ψ draws in a cloud (nothing for the base model).
+void add_extension(PosteriorCloud& c, const ModelExtension* extension, const Eigen::MatrixXd& psi) {
+  if (extension == nullptr) return;
+  c.model = extension->name();
+  for (const auto& p : extension->parameters()) c.psi_names.push_back(p.name);
+  c.psi = psi;
+}
 }  // namespace
 
 MarginalSmc::MarginalSmc(std::vector<const site::Site*> sites, Options options)
     : sites_(std::move(sites)),
       options_(std::move(options)),
       target_(sites_, with_particles(options_.target, options_.sampler.particles)),
-      sampler_(options_.sampler),
+      sampler_(with_model_moves(options_.sampler, options_.target.extension)),
       parallel_(options_.sampler.threads),
       truck_ids_(options_.target.table_spill_directory) {
   fingerprint_ = sites_fingerprint(sites_);
@@ -77,12 +97,15 @@ smc::MhSummary MarginalSmc::rejuvenate(int sweeps) {
   const Eigen::Index P = options_.sampler.particles;
   // The last `kept` sweeps' clouds (all of them unless that would pass max_pooled_draws).
   const int kept = static_cast<int>(std::clamp<std::int64_t>(options_.max_pooled_draws / P, 1, sweeps));
-  Eigen::MatrixXd pool(kHyperCount, P * kept);
+  Eigen::MatrixXd pool(kHyperCount, P * kept), psi_pool(target_.psi().rows(), P * kept);
   const smc::MhSummary s = sampler_.move(target_, "final rejuvenation", sweeps, [&](int sweep) {
     const int slot = sweep - (sweeps - kept);
-    if (slot >= 0) pool.middleCols(slot * P, P) = target_.theta();
+    if (slot < 0) return;
+    pool.middleCols(slot * P, P) = target_.theta();
+    psi_pool.middleCols(slot * P, P) = target_.psi();
   });
   pooled_theta_ = std::move(pool);
+  pooled_psi_ = std::move(psi_pool);
   return s;
 }
 
@@ -92,6 +115,7 @@ PosteriorCloud MarginalSmc::cloud() const {
   if (sweeps == 0) return c;
   // The pool: the weights do not change in a move, so every sweep's copy of particle i carries W_i.
   c.theta = pooled_theta_;
+  if (c.psi.rows() > 0) c.psi = pooled_psi_;
   // (Through a temporary: Eigen would resize the destination before reading a replicate of itself.)
   const Eigen::ArrayXd one_sweep = c.weights;
   c.weights = one_sweep.replicate(sweeps, 1) / static_cast<double>(sweeps);
@@ -107,7 +131,9 @@ PosteriorCloud MarginalSmc::current_cloud() const {
       speed.push_back(a.speed_mps(i));
       mass.push_back(a.sprung_mass_kg(i));
     }
-    return smc_cloud(*sites_.front(), sampler_, target_.theta(), std::move(speed), std::move(mass), trucks_seen());
+    PosteriorCloud c = smc_cloud(*sites_.front(), sampler_, target_.theta(), std::move(speed), std::move(mass), trucks_seen());
+    add_extension(c, target_.extension(), target_.psi());
+    return c;
   }
   // Each site's most recent trucks (kept as they arrive: a stream asks for the cloud at every
   // checkpoint, so this costs O(pool), not O(n)), site by site.
@@ -127,6 +153,7 @@ PosteriorCloud MarginalSmc::current_cloud() const {
   c.road_name.clear();
   for (std::size_t s = 0; s < sites_.size(); ++s) c.road_name += (s ? "+" : "") + sites_[s]->surface().name;
   c.sites = std::move(entries);
+  add_extension(c, target_.extension(), target_.psi());
   return c;
 }
 

@@ -124,7 +124,11 @@ class MarginalSmc {
   // no columns: no pool). A report of the final phase, not state: never checkpointed (a resumed
   // fit runs the sweeps again).
   Eigen::MatrixXd pooled_theta_;
-  void drop_pool() { pooled_theta_.resize(kHyperCount, 0); }
+  Eigen::MatrixXd pooled_psi_;  // the extension's ψ beside pooled_theta_ (no rows without one)
+  void drop_pool() {
+    pooled_theta_.resize(kHyperCount, 0);
+    pooled_psi_.resize(pooled_psi_.rows(), 0);
+  }
 };
 
 }  // namespace ssrfleet::fleet

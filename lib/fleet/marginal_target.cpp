@@ -1,6 +1,7 @@
 #include "fleet/marginal_target.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -73,18 +74,8 @@ void read_table_bytes(const std::string& bytes, model::TruckTable& t) {
 // the cloud's covariance fits the shape. Uniform priors on σ give a density σ on log σ.
 constexpr bool kLogScale[kHyperCount] = {false, true, false, true, false, true, true};
 
-HyperVector from_move_coordinates(const Eigen::Ref<const Eigen::MatrixXd>& x, Eigen::Index p) {
-  HyperVector t;
-  for (int j = 0; j < kHyperCount; ++j) t[static_cast<std::size_t>(j)] = kLogScale[j] ? std::exp(x(j, p)) : x(j, p);
-  return t;
-}
-
-double log_jacobian(const HyperVector& t) {
-  double s = 0.0;
-  for (int j = 0; j < kHyperCount; ++j)
-    if (kLogScale[j]) s += std::log(t[static_cast<std::size_t>(j)]);
-  return s;
-}
+// A particle's coordinates: θ, then the extension's ψ (up to this many parameters).
+constexpr int kMaxPsi = 16;
 
 // Weighted quantile of one row of the cloud.
 double weighted_quantile(const Eigen::Ref<const Eigen::RowVectorXd>& x, const Eigen::ArrayXd& W, double q) {
@@ -129,7 +120,15 @@ MarginalTarget::MarginalTarget(std::vector<const site::Site*> sites, Options opt
   }
   if (!(options_.min_piece_sd_m >= 1e-3)) throw UsageError("MarginalTarget: min_piece_sd_m must be >= 0.001 m");
   if (!(options_.table.mode_margin_nats >= 0.0)) throw UsageError("MarginalTarget: table.mode_margin_nats must be >= 0");
+  if (options_.extension != nullptr) {
+    if (options_.extension->edits_forward()) {
+      throw UsageError("the marginal core's tables hold the base model's forward model; '" + options_.extension->name() +
+                       "' changes it (fit it with --core latent)");
+    }
+    if (options_.extension->dim() > kMaxPsi) throw UsageError("MarginalTarget: an extension with too many parameters");
+  }
   theta_.resize(kHyperCount, options_.particles);
+  psi_.resize(options_.extension != nullptr ? options_.extension->dim() : 0, options_.particles);
   base_sum_ = Eigen::ArrayXd::Zero(options_.particles);
   inc_ = Eigen::ArrayXd::Zero(options_.particles);
   proposed_base_sum_ = inc_;
@@ -141,6 +140,11 @@ void MarginalTarget::initialise(const smc::RngFactory& rngs) {
   for (Eigen::Index i = 0; i < options_.particles; ++i) {
     smc::Rng rng = rngs.stream(static_cast<std::uint64_t>(i));
     for (int j = 0; j < kHyperCount; ++j) theta_(j, i) = prior.lo[j] + (prior.hi[j] - prior.lo[j]) * smc::uniform01(rng);
+    // ψ from its uniform prior, after θ from the same stream (no draws without an extension).
+    for (Eigen::Index j = 0; j < psi_dim(); ++j) {
+      const ExtensionParameter& par = options_.extension->parameters()[static_cast<std::size_t>(j)];
+      psi_(j, i) = par.lo + (par.hi - par.lo) * smc::uniform01(rng);
+    }
   }
   base_sum_.setZero();
   inc_.setZero();
@@ -172,19 +176,65 @@ HyperVector MarginalTarget::theta_of(Eigen::Index p) const {
   return t;
 }
 
+void MarginalTarget::encode(const HyperVector& theta, const double* psi, double* x) const {
+  for (int j = 0; j < kHyperCount; ++j) {
+    const double v = theta[static_cast<std::size_t>(j)];
+    x[j] = kLogScale[j] ? std::log(v) : v;
+  }
+  if (psi_dim() > 0) options_.extension->to_move_coordinates(psi, x + kHyperCount);
+}
+
+void MarginalTarget::decode(const double* x, HyperVector& theta, double* psi) const {
+  for (int j = 0; j < kHyperCount; ++j) theta[static_cast<std::size_t>(j)] = kLogScale[j] ? std::exp(x[j]) : x[j];
+  if (psi_dim() > 0) options_.extension->from_move_coordinates(x + kHyperCount, psi);
+}
+
+double MarginalTarget::log_jacobian(const HyperVector& theta, const double* psi) const {
+  double s = 0.0;
+  for (int j = 0; j < kHyperCount; ++j)
+    if (kLogScale[j]) s += std::log(theta[static_cast<std::size_t>(j)]);
+  if (psi_dim() > 0) s += options_.extension->log_move_jacobian(psi);
+  return s;
+}
+
+double MarginalTarget::log_prior_of(const HyperVector& theta, const double* psi) const {
+  double lp = options_.prior.log_prior(theta);
+  if (psi_dim() > 0 && lp > kNegInf) lp += options_.extension->log_prior(psi);
+  return lp;
+}
+
+void MarginalTarget::note_k_range(const model::TruckTable& table, int& lo, int& hi) const {
+  for (const std::int32_t i : table.k_index) {
+    if (hi < lo) {
+      lo = hi = i;
+    } else {
+      lo = std::min(lo, static_cast<int>(i));
+      hi = std::max(hi, static_cast<int>(i));
+    }
+  }
+}
+
+model::ThetaTerms MarginalTarget::terms_for(const model::FleetMarginal& marginal, const HyperVector& theta,
+                                            const double* psi) const {
+  if (psi_dim() == 0 || !options_.extension->edits_stiffness_distribution()) return marginal.prepare(theta);
+  const bool old = old_marginal_ && &marginal == &*old_marginal_;
+  return marginal.prepare(theta, options_.extension->stiffness_mixture(psi, theta[kK], theta[kSigmaK]),
+                          old ? old_k_lo_ : k_lo_, old ? old_k_hi_ : k_hi_);
+}
+
 double MarginalTarget::sum_loglik(const model::TableStore& store, const model::FleetMarginal& marginal,
-                                  const HyperVector& theta) const {
-  const model::ThetaTerms terms = marginal.prepare(theta);
+                                  const HyperVector& theta, const double* psi) const {
+  const model::ThetaTerms terms = terms_for(marginal, theta, psi);
   util::ExactSum s;
   marginal.add_log_likelihoods(store, store.trucks(), &terms, 1, &s);
   ranks_->sum(&s, 1);
   return s.value();
 }
 
-double MarginalTarget::log_posterior(const HyperVector& theta) const {
-  const double lp = options_.prior.log_prior(theta);
+double MarginalTarget::log_posterior(const HyperVector& theta, const double* psi) const {
+  const double lp = log_prior_of(theta, psi);
   if (lp == kNegInf) return lp;
-  return lp + sum_loglik(store_, marginal_, theta);
+  return lp + sum_loglik(store_, marginal_, theta, psi);
 }
 
 MarginalTarget::TableSettings MarginalTarget::ideal_settings(const Eigen::ArrayXd& W) const {
@@ -199,21 +249,21 @@ MarginalTarget::TableSettings MarginalTarget::ideal_settings(const Eigen::ArrayX
   // The fleet sd the lattice must resolve: a low quantile of its posterior, not the median, so that
   // FleetMarginal's floor (0.8 spacings) sits below the posterior's lower tail (Options); never
   // below a fraction of the median, so a broad early posterior does not make the lattice explode.
-  auto resolved_sd = [&](int h) {
-    const double median = weighted_quantile(theta_.row(h), W, 0.5);
-    return std::max(weighted_quantile(theta_.row(h), W, options_.lattice_sd_quantile),
-                    options_.lattice_sd_min_of_median * median);
+  auto resolved_sd = [&](const Eigen::RowVectorXd& sd) {
+    const double median = weighted_quantile(sd, W, 0.5);
+    return std::max(weighted_quantile(sd, W, options_.lattice_sd_quantile), options_.lattice_sd_min_of_median * median);
   };
-  const double fleet_k = resolved_sd(kSigmaK);
-  const double fleet_kt = resolved_sd(kSigmaKt);
+  const StiffnessMoments stiffness = stiffness_moments();
+  const double fleet_k = resolved_sd(stiffness.narrowest_sd);
+  const double fleet_kt = resolved_sd(theta_.row(kSigmaKt));
   const double width_k = 1.0 / std::sqrt(1.0 / (lik_k * lik_k) + 1.0 / (fleet_k * fleet_k));
   const double width_kt = 1.0 / std::sqrt(1.0 / (lik_kt * lik_kt) + 1.0 / (fleet_kt * fleet_kt));
   s.lattice.dk_npm = options_.lattice_fraction * width_k;
   s.lattice.dkt_npm = options_.lattice_fraction * width_kt;
   // The posterior predictive of (k, k_t), widened.
   model::TruckTableOptions::Population pop;
-  const Eigen::ArrayXd K = theta_.row(kK).transpose().array(), Kt = theta_.row(kKt).transpose().array();
-  const Eigen::ArrayXd sk = theta_.row(kSigmaK).transpose().array(), skt = theta_.row(kSigmaKt).transpose().array();
+  const Eigen::ArrayXd K = stiffness.mean, Kt = theta_.row(kKt).transpose().array();
+  const Eigen::ArrayXd sk = stiffness.sd, skt = theta_.row(kSigmaKt).transpose().array();
   pop.k_mean_npm = (W * K).sum();
   pop.kt_mean_npm = (W * Kt).sum();
   pop.k_sd_npm = options_.population_widening * std::sqrt((W * (sk.square() + (K - pop.k_mean_npm).square())).sum());
@@ -221,6 +271,28 @@ MarginalTarget::TableSettings MarginalTarget::ideal_settings(const Eigen::ArrayX
       options_.population_widening * std::sqrt((W * (skt.square() + (Kt - pop.kt_mean_npm).square())).sum());
   s.population = pop;
   return s;
+}
+
+MarginalTarget::StiffnessMoments MarginalTarget::stiffness_moments() const {
+  StiffnessMoments m;
+  const Eigen::Index P = options_.particles;
+  m.mean = theta_.row(kK).transpose().array();
+  m.sd = theta_.row(kSigmaK).transpose().array();
+  m.narrowest_sd = theta_.row(kSigmaK);
+  if (psi_dim() == 0 || !options_.extension->edits_stiffness_distribution()) return m;
+  for (Eigen::Index p = 0; p < P; ++p) {
+    const auto mixture = options_.extension->stiffness_mixture(psi_of(p), theta_(kK, p), theta_(kSigmaK, p));
+    double mean = 0.0, second = 0.0, narrowest = theta_(kSigmaK, p);
+    for (const auto& c : mixture) {
+      mean += c.weight * c.mean_npm;
+      second += c.weight * (c.sd_npm * c.sd_npm + c.mean_npm * c.mean_npm);
+      if (c.weight >= kResolvedComponentWeight) narrowest = std::min(narrowest, c.sd_npm);
+    }
+    m.mean[p] = mean;
+    m.sd[p] = std::sqrt(std::max(0.0, second - mean * mean));
+    m.narrowest_sd[p] = narrowest;
+  }
+  return m;
 }
 
 double MarginalTarget::max_piece_sd(const Eigen::ArrayXd& W) const {
@@ -382,6 +454,7 @@ void MarginalTarget::add_truck(double speed_mps, double sprung_mass_kg, const Ei
   }
   newest_ = model::TableStore{};
   newest_.append(table, site_index);
+  note_k_range(table, k_lo_, k_hi_);
   if (std::isfinite(table.lateral_error_nats)) {
     ++lateral_checked_;
     lateral_error_abs_sum_ += std::abs(table.lateral_error_nats);
@@ -438,6 +511,7 @@ void MarginalTarget::begin_rebuild(const Eigen::ArrayXd& W, const smc::ParallelF
   // Built in batches, each appended to the new store before the next is built, so a rebuild holds
   // at most a batch of tables besides the stores (a spilled store keeps memory flat through it).
   model::TableStore fresh(store_.spill_directory());
+  int fresh_lo = 0, fresh_hi = -1;
   std::vector<model::TruckTable> tables;
   for (Eigen::Index from = 0; from < local; from += kRebuildBatch) {
     const Eigen::Index batch = std::min(kRebuildBatch, local - from);
@@ -453,11 +527,16 @@ void MarginalTarget::begin_rebuild(const Eigen::ArrayXd& W, const smc::ParallelF
     for (Eigen::Index k = 0; k < batch; ++k) {
       const model::TruckTable& t = tables[static_cast<std::size_t>(k)];
       fresh.append(t, absorbed_.site(global(from + k)));
+      note_k_range(t, fresh_lo, fresh_hi);
       passes_ += t.passes - t.fit.passes;
     }
   }
   old_store_ = std::move(store_);
   old_marginal_ = marginal_;
+  old_k_lo_ = k_lo_;
+  old_k_hi_ = k_hi_;
+  k_lo_ = fresh_lo;
+  k_hi_ = fresh_hi;
   store_ = std::move(fresh);
   settings_ = ideal;
   marginal_ = make_marginal(settings_.lattice);
@@ -490,16 +569,18 @@ void MarginalTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref
   parallel(P, [&](Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index p = begin; p < end; ++p) {
       const HyperVector th = theta_of(p);
+      const double* psi = psi_of(p);
       const auto u = static_cast<std::size_t>(p);
       switch (mode_) {
         case Mode::kIdle:
           inc_[p] = 0.0;
           break;
         case Mode::kTruck:
-          inc_[p] = u >= slice_begin && u < slice_end ? marginal_.log_likelihood(newest_.view(0), marginal_.prepare(th)) : 0.0;
+          inc_[p] = u >= slice_begin && u < slice_end ? marginal_.log_likelihood(newest_.view(0), terms_for(marginal_, th, psi))
+                                                      : 0.0;
           break;
         case Mode::kCorrection: {
-          const model::ThetaTerms terms = marginal_.prepare(th);
+          const model::ThetaTerms terms = terms_for(marginal_, th, psi);
           marginal_.add_log_likelihoods(store_, store_.trucks(), &terms, 1, &sums[static_cast<std::size_t>(p)]);
           break;
         }
@@ -513,7 +594,7 @@ void MarginalTarget::log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref
   }
   for (Eigen::Index p = 0; p < P; ++p) {
     const HyperVector th = theta_of(p);
-    log_base[p] = options_.prior.log_prior(th) + log_jacobian(th) + base_sum_[p];
+    log_base[p] = log_prior_of(th, psi_of(p)) + log_jacobian(th, psi_of(p)) + base_sum_[p];
     loglik[p] = inc_[p];
   }
 }
@@ -524,6 +605,11 @@ void MarginalTarget::get_block(int /*block*/, Eigen::Ref<Eigen::MatrixXd> values
       values.row(j) = theta_.row(j).array().log().matrix();
     else
       values.row(j) = theta_.row(j);
+  }
+  std::array<double, kMaxPsi> u{};
+  for (Eigen::Index p = 0; p < psi_.cols() && psi_dim() > 0; ++p) {
+    options_.extension->to_move_coordinates(psi_.col(p).data(), u.data());
+    for (Eigen::Index j = 0; j < psi_dim(); ++j) values(kHyperCount + j, p) = u[static_cast<std::size_t>(j)];
   }
 }
 
@@ -548,12 +634,15 @@ void MarginalTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen:
     const auto chunk = static_cast<std::size_t>(end - begin);
     const auto first = static_cast<std::size_t>(begin);
     std::vector<model::ThetaTerms> terms(chunk), old_terms;
+    std::vector<HyperVector> thetas(chunk);
+    std::vector<double> psis(chunk * static_cast<std::size_t>(psi_dim()));
+    auto psi_at = [&](std::size_t c) { return psi_dim() > 0 ? psis.data() + c * static_cast<std::size_t>(psi_dim()) : nullptr; };
     for (std::size_t c = 0; c < chunk; ++c) {
-      const HyperVector th = from_move_coordinates(proposed, begin + static_cast<Eigen::Index>(c));
-      lp[first + c] = options_.prior.log_prior(th);
+      decode(proposed.col(begin + static_cast<Eigen::Index>(c)).data(), thetas[c], psi_at(c));
+      lp[first + c] = log_prior_of(thetas[c], psi_at(c));
       if (lp[first + c] > kNegInf) {
-        lp[first + c] += log_jacobian(th);
-        terms[c] = marginal_.prepare(th);  // default terms are outside the support: sum -inf
+        lp[first + c] += log_jacobian(thetas[c], psi_at(c));
+        terms[c] = terms_for(marginal_, thetas[c], psi_at(c));  // default terms are outside the support: sum -inf
       }
     }
     util::ExactSum* base = sums.data() + first;
@@ -572,7 +661,7 @@ void MarginalTarget::log_density_at(int /*block*/, const Eigen::Ref<const Eigen:
         old_terms.resize(chunk);
         for (std::size_t c = 0; c < chunk; ++c)
           if (lp[first + c] > kNegInf)
-            old_terms[c] = old_marginal_->prepare(from_move_coordinates(proposed, begin + static_cast<Eigen::Index>(c)));
+            old_terms[c] = terms_for(*old_marginal_, thetas[c], psi_at(c));
         old_marginal_->add_log_likelihoods(*old_store_, old_store_->trucks(), old_terms.data(), chunk, base);
         marginal_.add_log_likelihoods(store_, local, terms.data(), chunk, sums.data() + count + first);
         break;
@@ -600,7 +689,8 @@ void MarginalTarget::accept(int /*block*/, const std::vector<char>& accepted,
                             const Eigen::Ref<const Eigen::MatrixXd>& proposed) {
   for (Eigen::Index p = 0; p < options_.particles; ++p) {
     if (!accepted[static_cast<std::size_t>(p)]) continue;
-    const HyperVector th = from_move_coordinates(proposed, p);
+    HyperVector th;
+    decode(proposed.col(p).data(), th, psi_dim() > 0 ? psi_.col(p).data() : nullptr);
     for (int j = 0; j < kHyperCount; ++j) theta_(j, p) = th[static_cast<std::size_t>(j)];
     base_sum_[p] = proposed_base_sum_[p];
     inc_[p] = proposed_inc_[p];
@@ -608,11 +698,12 @@ void MarginalTarget::accept(int /*block*/, const std::vector<char>& accepted,
 }
 
 void MarginalTarget::resample(const std::vector<Eigen::Index>& ancestors) {
-  const Eigen::MatrixXd theta = theta_;
+  const Eigen::MatrixXd theta = theta_, psi = psi_;
   const Eigen::ArrayXd base = base_sum_, inc = inc_;
   for (Eigen::Index p = 0; p < options_.particles; ++p) {
     const Eigen::Index a = ancestors[static_cast<std::size_t>(p)];
     theta_.col(p) = theta.col(a);
+    if (psi_dim() > 0) psi_.col(p) = psi.col(a);
     base_sum_[p] = base[a];
     inc_[p] = inc[a];
   }

@@ -34,6 +34,7 @@
 #include "model/fleet_model.hpp"
 #include "util/binary_io.hpp"
 #include "model/fleet_marginal.hpp"
+#include "model/model_extension.hpp"
 #include "model/table_store.hpp"
 #include "model/truck_table.hpp"
 #include "site/site.hpp"
@@ -113,6 +114,12 @@ class MarginalTarget final : public smc::TemperedModel {
     // that the kernel pages (model/table_store.hpp), so the process's own memory stays flat as the
     // trucks grow (a stream puts them in its state directory). The same bits either way.
     std::string table_spill_directory;
+    // A model extension fitted alongside θ (not owned; outlives the target), or null for the base
+    // model. Its parameters ψ join each particle (the moves see (θ, ψ) as one block). The tables
+    // hold the base model's forward model, so only an extension that changes the fleet's
+    // stiffness distribution alone fits here (ModelExtension::edits_forward() false): its mixture
+    // reweights the lattice's nodes exactly (FleetMarginal::prepare). UsageError for any other.
+    const ModelExtension* extension = nullptr;
   };
 
   struct TableSettings {
@@ -160,6 +167,8 @@ class MarginalTarget final : public smc::TemperedModel {
 
   Eigen::Index trucks() const { return static_cast<Eigen::Index>(absorbed_.size()); }
   const Eigen::MatrixXd& theta() const { return theta_; }  // 7 x P
+  const Eigen::MatrixXd& psi() const { return psi_; }      // the extension's ψ, dim x P (0 rows without)
+  const ModelExtension* extension() const { return options_.extension; }
   const TableSettings& settings() const { return settings_; }
   // The tables of this rank's trucks, in truck order (every truck's with one rank).
   const model::TableStore& tables() const { return store_; }
@@ -189,8 +198,12 @@ class MarginalTarget final : public smc::TemperedModel {
   bool read_old_truck_records() const { return loaded_version_ != 0 && loaded_version_ < 3; }
   // Σ_i ℓ_i(θ) + log p(θ) of particle p as cached (for tests: the density the moves target).
   double cached_log_posterior(Eigen::Index p) const { return base_sum_[p] + inc_[p] + log_prior(p); }
-  // The same recomputed from the tables (collective: every rank calls it).
-  double log_posterior(const HyperVector& theta) const;
+  // The same recomputed from the tables (collective: every rank calls it); psi: the extension's
+  // parameters (ignored without one).
+  double log_posterior(const HyperVector& theta, const double* psi = nullptr) const;
+  // What ℓ_i needs of (θ, ψ) on a FleetMarginal of this target (the extension's stiffness mixture
+  // tabulated over the k indices its tables use).
+  model::ThetaTerms terms_for(const model::FleetMarginal& marginal, const HyperVector& theta, const double* psi) const;
 
   // Checkpoint: the particles, the data and the tables (so a resume does not rebuild them).
   void save(BinaryWriter& out) const;
@@ -208,25 +221,54 @@ class MarginalTarget final : public smc::TemperedModel {
   Eigen::Index particles() const override { return options_.particles; }
   void log_density(Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
                    const smc::ParallelFor& parallel) override;
-  std::vector<smc::BlockSpec> blocks() const override { return {{"theta", kHyperCount}}; }
+  std::vector<smc::BlockSpec> blocks() const override {
+    return {{psi_.rows() > 0 ? "theta+psi" : "theta", kHyperCount + psi_.rows()}};
+  }
   void get_block(int block, Eigen::Ref<Eigen::MatrixXd> values) const override;
   void log_density_at(int block, const Eigen::Ref<const Eigen::MatrixXd>& proposed,
                       Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik,
                       const smc::ParallelFor& parallel) override;
   void accept(int block, const std::vector<char>& accepted, const Eigen::Ref<const Eigen::MatrixXd>& proposed) override;
   void resample(const std::vector<Eigen::Index>& ancestors) override;
+  // With an extension that has a stiffness jump (e.g. two classes trading places): "stiffness jump".
+  std::vector<std::string> model_moves() const override;
+  ModelMoveResult run_model_move(int move, int run_in_stage, double phi, const smc::RngFactory& rngs,
+                                 const smc::ParallelFor& parallel, Eigen::Ref<Eigen::ArrayXd> log_base,
+                                 Eigen::Ref<Eigen::ArrayXd> loglik) override;
 
  private:
   enum class Mode { kIdle, kTruck, kCorrection };
   // A rebuild builds this many tables at a time (about 5 MB of them on AS1's 16 sensors).
   static constexpr Eigen::Index kRebuildBatch = 1024;
   HyperVector theta_of(Eigen::Index p) const;
+  const double* psi_of(Eigen::Index p) const { return psi_.rows() > 0 ? psi_.col(p).data() : nullptr; }
+  Eigen::Index psi_dim() const { return psi_.rows(); }
+  // The moves' coordinates (θ's scales on the log scale, ψ in the extension's move coordinates)
+  // and back, with the log Jacobian of the map (the target's density in move coordinates gains it).
+  void encode(const HyperVector& theta, const double* psi, double* x) const;
+  void decode(const double* x, HyperVector& theta, double* psi) const;
+  double log_jacobian(const HyperVector& theta, const double* psi) const;
+  double log_prior_of(const HyperVector& theta, const double* psi) const;
+  // The k indices of the tables in store_ (and newest_), and of old_store_ during a correction:
+  // the range terms_for() tabulates an extension's stiffness mixture over.
+  void note_k_range(const model::TruckTable& table, int& lo, int& hi) const;
+  int k_lo_ = 0, k_hi_ = -1, old_k_lo_ = 0, old_k_hi_ = -1;
   // The table option max_piece_sd_m the cloud implies (Options::lateral_piece_fraction).
   double max_piece_sd(const Eigen::ArrayXd& W) const;
-  double log_prior(Eigen::Index p) const { return options_.prior.log_prior(theta_of(p)); }
+  double log_prior(Eigen::Index p) const { return log_prior_of(theta_of(p), psi_of(p)); }
   // Σ_i ℓ_i(θ) over every rank's trucks in a store (collective).
   double sum_loglik(const model::TableStore& store, const model::FleetMarginal& marginal,
-                    const HyperVector& theta) const;
+                    const HyperVector& theta, const double* psi) const;
+  // The fleet's stiffness distribution per particle, as the tables' settings need it: its mean and
+  // sd (the predictive that decides which nodes a table keeps), and the narrowest sd among its
+  // components that carry at least kResolvedComponentWeight of the trucks (what the lattice must
+  // resolve). σ_k and K for the base model; an extension's mixture otherwise.
+  struct StiffnessMoments {
+    Eigen::ArrayXd mean, sd;
+    Eigen::RowVectorXd narrowest_sd;
+  };
+  static constexpr double kResolvedComponentWeight = 0.05;
+  StiffnessMoments stiffness_moments() const;
   // The settings the cloud implies.
   TableSettings ideal_settings(const Eigen::ArrayXd& W) const;
   model::TruckTableOptions table_options(const TableSettings& s) const;
@@ -269,6 +311,7 @@ class MarginalTarget final : public smc::TemperedModel {
   }
 
   Eigen::MatrixXd theta_;   // 7 x P
+  Eigen::MatrixXd psi_;     // the extension's ψ: dim x P (no rows without one)
   Eigen::ArrayXd base_sum_;  // Σ ℓ_i over the trucks in log γ
   Eigen::ArrayXd inc_;       // the stage's increment at the current θ
   Eigen::ArrayXd proposed_base_sum_, proposed_inc_;

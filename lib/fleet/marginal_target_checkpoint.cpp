@@ -14,7 +14,9 @@ constexpr std::uint64_t kMagic = 0x4e52414d46525353ULL;  // "SSRFMARN"
 // read as one whose options are due to freeze at its next truck: exact, as every table in it is.
 // Version 3 starts each truck record with its site's index (several sites, one fleet); a truck of
 // an older state is of the only site there was, index 0.
-constexpr std::uint32_t kVersion = 3;
+// Version 4 adds the model fitted (an extension's name, "" for the base model) and each particle's
+// ψ; an older state is of the base model.
+constexpr std::uint32_t kVersion = 4;
 
 }  // namespace
 
@@ -58,6 +60,8 @@ void MarginalTarget::save_particles(BinaryWriter& out) const {
   }
   out.matrix(theta_);
   out.matrix(base_sum_.matrix());
+  out.text(options_.extension != nullptr ? options_.extension->name() : std::string());
+  out.matrix(psi_);
   out.value<std::uint64_t>(absorbed_.size());
 }
 
@@ -134,6 +138,13 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   }
   theta_ = in.matrix("theta", kHyperCount, options_.particles);
   base_sum_ = in.matrix("log-likelihood sums", options_.particles, 1).array();
+  const std::string model = version >= 4 ? in.text("model", 4096) : std::string();
+  const std::string wanted = options_.extension != nullptr ? options_.extension->name() : std::string();
+  if (model != wanted) {
+    in.fail("model", "the state fits model '" + (model.empty() ? std::string("base") : model) + "'; this run asks for '" +
+                         (wanted.empty() ? std::string("base") : wanted) + "'");
+  }
+  if (version >= 4) psi_ = in.matrix("psi", psi_dim(), options_.particles);
   inc_ = Eigen::ArrayXd::Zero(options_.particles);
   const auto n = in.value<std::uint64_t>("trucks");
   if (n > 100'000'000ULL) in.fail("trucks", "implausible truck count " + std::to_string(n));
@@ -152,6 +163,8 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   mode_ = Mode::kIdle;
   old_store_.reset();
   old_marginal_.reset();
+  k_lo_ = 0;
+  k_hi_ = -1;
   return n;
 }
 
@@ -187,6 +200,7 @@ void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
     }
     absorbed_.push_back(speed, mass, site, impact_factors, fit);
     add_to_width_sums(fit);
+    note_k_range(t, k_lo_, k_hi_);
     if (ranks_->owns(truck)) store_.append(t, site);  // another rank's table is read past
   }
 }

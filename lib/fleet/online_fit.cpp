@@ -79,7 +79,13 @@ std::unique_ptr<OnlineFit> make_online_fit(const std::vector<const site::Site*>&
   if (options.core == OnlineFitOptions::Core::kMarginal) {
     std::string why;
     if (!options.marginal.sampler.IsValid(&why)) throw UsageError(why);
-    return std::make_unique<MarginalFit>(sites, options.marginal);
+    if (!OnlineFitOptions::marginal_carries(options.extension)) {
+      throw UsageError("model '" + options.extension->name() + "' changes the forward model, which the marginal core's "
+                       "tables hold fixed: fit it on the latent core (--core latent, the default for this model)");
+    }
+    MarginalSmc::Options marginal = options.marginal;
+    marginal.target.extension = options.extension;
+    return std::make_unique<MarginalFit>(sites, marginal);
   }
   if (sites.size() > 1) {
     throw UsageError("a fit of several sites runs on the marginal core (each truck's table is built through its own "
@@ -87,7 +93,9 @@ std::unique_ptr<OnlineFit> make_online_fit(const std::vector<const site::Site*>&
   }
   std::string why;
   if (!options.latent.sampler.IsValid(&why)) throw UsageError(why);
-  return std::make_unique<LatentFit>(*sites.front(), options.latent);
+  FleetSmc::Options latent = options.latent;
+  if (options.extension != nullptr) latent.extension = options.extension;
+  return std::make_unique<LatentFit>(*sites.front(), latent);
 }
 
 }  // namespace ssrfleet::fleet

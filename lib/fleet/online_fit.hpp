@@ -5,8 +5,8 @@
 //   marginal (default)  MarginalSmc: IBIS over θ with each truck's latents integrated out in a
 //                       table; cost per truck flat in n (docs/inference.md);
 //   latent              FleetSmc: every truck's latents in every particle, older trucks re-swept
-//                       per truck (cost grows with n); needed for model extensions and for the
-//                       bounded-memory window mode.
+//                       per truck (cost grows with n); needed for model extensions that change
+//                       the forward model and for the bounded-memory window mode.
 #pragma once
 
 #include <deque>
@@ -67,6 +67,20 @@ class OnlineFit {
 struct OnlineFitOptions {
   enum class Core { kMarginal, kLatent };
   Core core = Core::kMarginal;
+  // The model extension fitted alongside θ (not owned; outlives the fit), or null for the base
+  // model. make_online_fit hands it to the chosen core.
+  const ModelExtension* extension = nullptr;
+  // Whether the marginal core carries a model: the base model, and extensions that change the
+  // fleet's stiffness distribution alone (their mixture reweights the tables' nodes exactly); an
+  // effect that changes the forward model needs the latent core.
+  static bool marginal_carries(const ModelExtension* extension) {
+    return extension == nullptr || !extension->edits_forward();
+  }
+  // The core a model fits on unless the user names one: the marginal core wherever it carries the
+  // model (its cost per truck is flat in n), else the latent core.
+  static Core default_core(const ModelExtension* extension) {
+    return marginal_carries(extension) ? Core::kMarginal : Core::kLatent;
+  }
   MarginalSmc::Options marginal;
   FleetSmc::Options latent;
   // The sampler options shared by both (particles, threads, seed): copied into the chosen core's.

@@ -110,11 +110,15 @@ PredictiveTrucks draw_predictive_trucks(const PosteriorCloud& posterior, double 
         out.trucks.sprung_mass_kg[b] = posterior.sprung_mass_kg[obs];
       }
       if (own_stiffness) {
-        // The model's distribution from the same stratified uniform (untruncated: a stiffness
-        // below zero is many sd away for any fleet the prior allows).
-        const double z = truncated_normal_quantile(u_k[i], 0.0, 1.0, -inf, inf);
-        out.trucks.stiffness_npm[b] =
-            model->draw_stiffness(posterior.psi.col(p).data(), th(kK), th(kSigmaK), uniform_open01(class_engine), z);
+        // The model's distribution as a mixture of normals: a class by its own uniform, then its
+        // normal from the same stratified uniform as the base model's, truncated at zero like it (a
+        // class the data barely constrain, e.g. a second class of a small share, can reach below).
+        const auto mixture = model->stiffness_mixture(posterior.psi.col(p).data(), th(kK), th(kSigmaK));
+        const double pick = uniform_open01(class_engine);
+        double below = 0.0;
+        std::size_t c = 0;
+        while (c + 1 < mixture.size() && pick >= below + mixture[c].weight) below += mixture[c++].weight;
+        out.trucks.stiffness_npm[b] = truncated_normal_quantile(u_k[i], mixture[c].mean_npm, mixture[c].sd_npm, 0.0, inf);
       } else {
         out.trucks.stiffness_npm[b] = truncated_normal_quantile(u_k[i], th(kK), th(kSigmaK), 0.0, inf);
       }

@@ -113,6 +113,14 @@ double ComposedExtension::stiffness_cdf(const double* psi, double k, double mean
   return stiffness_->stiffness_cdf(full.data(), k, mean_npm, sd_npm);
 }
 
+std::vector<ModelExtension::StiffnessComponent> ComposedExtension::stiffness_mixture(const double* psi, double mean_npm,
+                                                                                    double sd_npm) const {
+  if (stiffness_ == nullptr) return ModelExtension::stiffness_mixture(psi, mean_npm, sd_npm);
+  std::array<double, kMaxComponentParameters> full{};
+  component_psi(stiffness_index_, psi, full.data());
+  return stiffness_->stiffness_mixture(full.data(), mean_npm, sd_npm);
+}
+
 double ComposedExtension::draw_stiffness(const double* psi, double mean_npm, double sd_npm, double uniform,
                                          double standard_normal) const {
   if (stiffness_ == nullptr) return ModelExtension::draw_stiffness(psi, mean_npm, sd_npm, uniform, standard_normal);

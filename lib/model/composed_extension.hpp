@@ -50,6 +50,7 @@ class ComposedExtension final : public ModelExtension {
   bool edits_stiffness_distribution() const override { return stiffness_ != nullptr; }
   double log_stiffness_density(const double* psi, double k, double mean_npm, double sd_npm) const override;
   double stiffness_cdf(const double* psi, double k, double mean_npm, double sd_npm) const override;
+  std::vector<StiffnessComponent> stiffness_mixture(const double* psi, double mean_npm, double sd_npm) const override;
   double draw_stiffness(const double* psi, double mean_npm, double sd_npm, double uniform,
                         double standard_normal) const override;
   void edit_simulated_truck(const double* psi, records::Truck& truck, double uniform,

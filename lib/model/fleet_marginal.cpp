@@ -56,6 +56,57 @@ ThetaTerms FleetMarginal::prepare(const fleet::HyperVector& theta) const {
   return t;
 }
 
+ThetaTerms FleetMarginal::prepare(const fleet::HyperVector& theta,
+                                  const std::vector<fleet::ModelExtension::StiffnessComponent>& stiffness,
+                                  int k_index_lo, int k_index_hi) const {
+  ThetaTerms t = prepare(theta);
+  if (!t.inside) return t;
+  if (stiffness.size() == 1 && stiffness[0].weight == 1.0 && stiffness[0].mean_npm == theta[fleet::kK] &&
+      stiffness[0].sd_npm == theta[fleet::kSigmaK]) {
+    return t;
+  }
+  if (stiffness.size() > kMaxStiffnessComponents) throw std::invalid_argument("FleetMarginal: too many stiffness components");
+  const double floor_sd = kMinSdPerSpacing * lattice_.dk_npm;
+  for (const auto& c : stiffness) {
+    if (!(c.weight > 0.0)) continue;
+    if (!(c.sd_npm > 0.0)) {
+      t.inside = false;
+      return t;
+    }
+    t.k_mixture.push_back({std::log(c.weight), c.mean_npm, std::max(c.sd_npm, floor_sd)});
+  }
+  if (t.k_mixture.empty()) {
+    t.inside = false;
+    return t;
+  }
+  // The constant held the base model's -½ log 2π - log σ_k; the mixture's density replaces it.
+  const double sk_q = std::max(theta[fleet::kSigmaK], floor_sd);
+  for (double& c : t.site_constant) c += 0.5 * kLog2Pi + std::log(sk_q);
+  t.k_index_lo = k_index_lo;
+  if (k_index_hi >= k_index_lo) {
+    t.k_log_density.resize(static_cast<std::size_t>(k_index_hi - k_index_lo + 1));
+    for (int i = k_index_lo; i <= k_index_hi; ++i)
+      t.k_log_density[static_cast<std::size_t>(i - k_index_lo)] = k_log_density_at(t, i);
+  }
+  return t;
+}
+
+float FleetMarginal::k_log_density_at(const ThetaTerms& t, int i) const {
+  const double k = lattice_.k_at(i);
+  double top = -std::numeric_limits<double>::infinity();
+  double terms[kMaxStiffnessComponents];
+  const std::size_t n = t.k_mixture.size();
+  for (std::size_t c = 0; c < n; ++c) {
+    const auto& m = t.k_mixture[c];
+    const double a = (k - m.mean_npm) / m.sd_npm;
+    terms[c] = m.log_weight - 0.5 * a * a - std::log(m.sd_npm) - 0.5 * kLog2Pi;
+    top = std::max(top, terms[c]);
+  }
+  double sum = 0.0;
+  for (std::size_t c = 0; c < n; ++c) sum += std::exp(terms[c] - top);
+  return static_cast<float>(top + std::log(sum));
+}
+
 void FleetMarginal::entry_exponents(const TableView& table, const ThetaTerms& t, float* exponents) const {
   const std::size_t n = table.nodes;
   const float eps_per_var = static_cast<float>(table.u_ref / (t.u * t.lateral_var_m2));
@@ -71,6 +122,21 @@ void FleetMarginal::entry_exponents(const TableView& table, const ThetaTerms& t,
   const float a0 = static_cast<float>(t.a0), da = static_cast<float>(t.da), b0 = static_cast<float>(t.b0),
               db = static_cast<float>(t.db), half_u = static_cast<float>(t.half_u), log_u = static_cast<float>(t.log_u);
   const float lateral_mean = static_cast<float>(t.lateral_mean_m);
+  if (t.has_k_mixture()) {
+    // The node's k weight from the mixture's table (computed on the spot outside its range).
+    const float* density = t.k_log_density.data();
+    const auto size = static_cast<std::int64_t>(t.k_log_density.size());
+    for (std::size_t g = 0; g < n; ++g) {
+      const std::int64_t at = static_cast<std::int64_t>(k_index[g]) - t.k_index_lo;
+      const float kd = at >= 0 && at < size ? density[at] : k_log_density_at(t, k_index[g]);
+      const float b = b0 + db * static_cast<float>(kt_index[g]);
+      const float dz = z_mean[g] - lateral_mean;
+      const float eps = z_var[g] * eps_per_var;
+      out[g] = c[g] - m[g] * half_u - bb[g] * log_u + kd - 0.5f * b * b - 0.5f * eps -
+               dz * dz * inv_2var * (1.0f - eps + eps * eps);
+    }
+    return;
+  }
   for (std::size_t g = 0; g < n; ++g) {
     const float a = a0 + da * static_cast<float>(k_index[g]);
     const float b = b0 + db * static_cast<float>(kt_index[g]);

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "model/fleet_model.hpp"
+#include "model/model_extension.hpp"
 #include "model/table_store.hpp"
 #include "model/truck_table.hpp"
 #include "util/exact_sum.hpp"
@@ -55,11 +56,24 @@ struct ThetaTerms {
   // The truck-independent part of ℓ_i for a truck of each site (M_s and P_road_s differ by site).
   std::vector<double> site_constant;
   bool inside = false;         // θ in the support (σ's positive, road mass positive)
+  // A stiffness distribution other than the base model's N(K, σ_k²) (a model extension's mixture
+  // of normals, ModelExtension::stiffness_mixture): node g takes log p(k_g) in place of
+  // -½ a_g² - log σ_k - ½ log 2π, read from k_log_density[i - k_index_lo] (i the node's k index),
+  // computed once per θ. Empty for the base model.
+  struct KComponent {
+    double log_weight = 0.0, mean_npm = 0.0, sd_npm = 0.0;  // sd already held to the floor
+  };
+  std::vector<KComponent> k_mixture;
+  std::vector<float> k_log_density;
+  int k_index_lo = 0;
+  bool has_k_mixture() const { return !k_mixture.empty(); }
 };
 
 class FleetMarginal {
  public:
   static constexpr double kMinSdPerSpacing = 0.8;
+  // The most components a stiffness mixture may have (prepare's std::invalid_argument beyond).
+  static constexpr std::size_t kMaxStiffnessComponents = 8;
 
   FleetMarginal(int sensors, fleet::LateralRange range, Lattice lattice)
       : FleetMarginal(std::vector<SiteConstants>{{sensors, range}}, lattice) {}
@@ -70,6 +84,16 @@ class FleetMarginal {
   const std::vector<SiteConstants>& sites() const { return sites_; }
 
   ThetaTerms prepare(const fleet::HyperVector& theta) const;
+  // The same with the fleet's stiffness distribution a mixture of normals (weights summing to 1;
+  // each component's sd is evaluated at the floor below if it lies under it, as σ_k is). The
+  // node weights are tabulated for k indices [k_index_lo, k_index_hi] (the stored tables'
+  // range: a node outside it is computed on the spot, with the same bits). One component of
+  // weight 1 is the base model: prepare(theta), bit for bit.
+  ThetaTerms prepare(const fleet::HyperVector& theta,
+                     const std::vector<fleet::ModelExtension::StiffnessComponent>& stiffness, int k_index_lo,
+                     int k_index_hi) const;
+  // log p(k) at k index i under terms' mixture, in single precision (the node sum's).
+  float k_log_density_at(const ThetaTerms& terms, int i) const;
   // ℓ_i(θ); -inf when θ is outside the support.
   double log_likelihood(const TableView& table, const ThetaTerms& terms) const;
   double log_likelihood(const TruckTable& table, const ThetaTerms& terms) const {

@@ -44,6 +44,11 @@ double ModelExtension::log_prior(const double* psi) const {
   return lp;
 }
 
+std::vector<ModelExtension::StiffnessComponent> ModelExtension::stiffness_mixture(const double* /*psi*/, double mean_npm,
+                                                                                 double sd_npm) const {
+  return {{1.0, mean_npm, sd_npm}};
+}
+
 void ModelExtension::to_move_coordinates(const double* psi, double* u) const {
   std::copy(psi, psi + dim(), u);
 }

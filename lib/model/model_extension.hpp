@@ -103,6 +103,14 @@ class ModelExtension {
   // normal, so the caller's random stream decides.
   virtual double draw_stiffness(const double* psi, double mean_npm, double sd_npm, double uniform,
                                 double standard_normal) const;
+  // The same distribution as a mixture of normals, Σ_c w_c N(k | m_c, s_c²) (components with
+  // weight 0 may be left out): how the marginal core weights its (k, k_t) lattice's nodes
+  // (model/fleet_marginal.hpp), each component's sd held to the lattice's floor on its own. The
+  // base model's is one component, N(K, σ_k²). Must agree with log_stiffness_density.
+  struct StiffnessComponent {
+    double weight = 1.0, mean_npm = 0.0, sd_npm = 0.0;
+  };
+  virtual std::vector<StiffnessComponent> stiffness_mixture(const double* psi, double mean_npm, double sd_npm) const;
   // Simulation: turns a truck drawn from the base fleet (simulator.hpp) into one of the extended
   // fleet, from a uniform and a standard normal of its own (e.g. moves it to the second class).
   virtual void edit_simulated_truck(const double* /*psi*/, records::Truck& /*truck*/, double /*uniform*/,

@@ -38,6 +38,15 @@ class PhysicalEffects final : public ModelExtension {
                         double standard_normal) const override {
     return inner_.draw_stiffness(psi, mean_npm, sd_npm, uniform, standard_normal);
   }
+  double log_stiffness_density(const double* psi, double k, double mean_npm, double sd_npm) const override {
+    return inner_.log_stiffness_density(psi, k, mean_npm, sd_npm);
+  }
+  double stiffness_cdf(const double* psi, double k, double mean_npm, double sd_npm) const override {
+    return inner_.stiffness_cdf(psi, k, mean_npm, sd_npm);
+  }
+  std::vector<StiffnessComponent> stiffness_mixture(const double* psi, double mean_npm, double sd_npm) const override {
+    return inner_.stiffness_mixture(psi, mean_npm, sd_npm);
+  }
 
  private:
   const ModelExtension& inner_;

@@ -68,12 +68,10 @@ struct Writer {
 fleet::PosteriorCloud stream_fit(const site::Site& site, const std::vector<records::WimRecord>& records, const Options& o,
                                  const std::string& label,
                                  const std::function<void(std::size_t, const fleet::OnlineFit&)>& after_each) {
-  fleet::OnlineFitOptions so;  // the default (marginal) core, as `fit` uses
+  fleet::OnlineFitOptions so;  // the core `fit` chooses for the model
   const fleet::ModelSpec model = fleet::parse_model_spec(o.model, site);
-  if (model.extension) {  // effects ride in the latent core's particles, as `fit --model` runs them
-    so.core = fleet::OnlineFitOptions::Core::kLatent;
-    so.latent.extension = model.extension.get();
-  }
+  so.core = fleet::OnlineFitOptions::default_core(model.extension.get());
+  so.extension = model.extension.get();
   so.sampler().particles = o.particles;
   so.sampler().threads = o.threads > 0 ? o.threads : smc::TemperedSampler::Options::default_threads();
   so.sampler().seed = o.seed;

@@ -65,8 +65,8 @@ struct StreamOptions {
   int report_every = 0;         // print the SSR table every N absorbed trucks (0 = only at the end)
   bool follow = false;          // at end of input, wait for more (like tail -f) until stopped
   double follow_poll_s = 0.25;  // how often to look for more input in follow mode
-  // The core (marginal by default) and its sampler options; fit.latent.extension: the model's
-  // effects (model_spec.hpp; on the latent core), recorded in the state by name.
+  // The core (marginal by default) and its sampler options; fit.extension: the model's effects
+  // (model_spec.hpp), recorded in the state by name.
   fleet::OnlineFitOptions fit;
   predict::PredictionOptions prediction;
   // Vehicle classes: when not empty, the only classes a new state accepts (a record of another is
@@ -123,7 +123,7 @@ class WimStream {
   std::unique_ptr<StateLock> lock_;  // held for the stream's life (state_lock.hpp)
   // The model's spec as the state records it: "base" or the extension's name.
   std::string model_text() const {
-    return options_.fit.latent.extension != nullptr ? options_.fit.latent.extension->name() : "base";
+    return options_.fit.extension != nullptr ? options_.fit.extension->name() : "base";
   }
   void restore_checkpoint(const std::string& checkpoint);
   void open_history();

@@ -46,6 +46,10 @@ class SecondClass final : public ModelExtension {
   double stiffness_cdf(const double* psi, double k, double mean_npm, double sd_npm) const override {
     return (1.0 - psi[kShare]) * normal_cdf((k - mean_npm) / sd_npm) + psi[kShare] * normal_cdf((k - psi[kMean2]) / psi[kSd2]);
   }
+  std::vector<StiffnessComponent> stiffness_mixture(const double* psi, double mean_npm, double sd_npm) const override {
+    if (psi[kShare] <= 0.0) return {{1.0, mean_npm, sd_npm}};
+    return {{1.0 - psi[kShare], mean_npm, sd_npm}, {psi[kShare], psi[kMean2], psi[kSd2]}};
+  }
   double draw_stiffness(const double* psi, double mean_npm, double sd_npm, double uniform,
                         double standard_normal) const override {
     return uniform < psi[kShare] ? psi[kMean2] + psi[kSd2] * standard_normal : mean_npm + sd_npm * standard_normal;
