@@ -299,6 +299,16 @@ TEST_CASE("a set of parameters is summarised column by column", "[util][converge
     CHECK(got.mcse_mean == one.mcse_mean);
     CHECK(got.mcse_q95 == one.mcse_q95);
   }
+  // In parallel chunks of one parameter, last first: the same bits.
+  const util::ParallelRange backwards = [](Eigen::Index n, const util::RangeBody& body) {
+    for (Eigen::Index j = n - 1; j >= 0; --j) body(j, j + 1);
+  };
+  const std::vector<util::ConvergenceSummary> chunked = util::summarise_parameters(chains, backwards);
+  for (std::size_t i = 0; i < 3; ++i) {
+    CHECK(chunked[i].rhat == all[i].rhat);
+    CHECK(chunked[i].ess_tail == all[i].ess_tail);
+    CHECK(chunked[i].mcse_q05 == all[i].mcse_q05);
+  }
   // Slower mixing, fewer effective draws.
   CHECK(all[0].ess_bulk > all[1].ess_bulk);
   CHECK(all[1].ess_bulk > all[2].ess_bulk);

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/special_functions/beta.hpp>
@@ -32,9 +32,10 @@ std::vector<double> all_draws(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
   return values;
 }
 
-double sample_quantile(const Eigen::Ref<const Eigen::MatrixXd>& draws, double p) {
+std::vector<double> sorted_draws(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
   std::vector<double> values = all_draws(draws);
-  return quantile_type7(values, p);
+  std::sort(values.begin(), values.end());
+  return values;
 }
 
 // Φ(-1) and Φ(1): the normal probabilities below one sd under and one sd over the mean.
@@ -80,22 +81,21 @@ Eigen::MatrixXd rank_normalise(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
   const Eigen::Index s = draws.size();
   Eigen::MatrixXd z(draws.rows(), draws.cols());
   if (s == 0) return z;
-  const Eigen::MatrixXd dense = draws;  // contiguous, column-major
-  std::vector<Eigen::Index> order(static_cast<std::size_t>(s));
-  std::iota(order.begin(), order.end(), Eigen::Index{0});
-  std::sort(order.begin(), order.end(),
-            [&](Eigen::Index a, Eigen::Index b) { return dense.data()[a] < dense.data()[b]; });
+  // (value, position in z) pairs sorted by value: ties end up next to each other.
+  std::vector<std::pair<double, Eigen::Index>> order(static_cast<std::size_t>(s));
+  for (Eigen::Index c = 0, i = 0; c < draws.cols(); ++c)
+    for (Eigen::Index r = 0; r < draws.rows(); ++r, ++i)
+      order[static_cast<std::size_t>(i)] = {draws(r, c), i};
+  std::sort(order.begin(), order.end());
   const boost::math::normal standard;
   const double denominator = static_cast<double>(s) + 0.25;
-  for (Eigen::Index first = 0; first < s;) {
-    Eigen::Index last = first + 1;  // [first, last) share one value
-    while (last < s && dense.data()[order[static_cast<std::size_t>(last)]] ==
-                           dense.data()[order[static_cast<std::size_t>(first)]])
-      ++last;
+  for (std::size_t first = 0; first < order.size();) {
+    std::size_t last = first + 1;  // [first, last) share one value
+    while (last < order.size() && order[last].first == order[first].first) ++last;
     // 1-based ranks first+1 .. last, averaged.
     const double rank = 0.5 * static_cast<double>(first + 1 + last);
     const double score = boost::math::quantile(standard, (rank - 0.375) / denominator);
-    for (Eigen::Index i = first; i < last; ++i) z.data()[order[static_cast<std::size_t>(i)]] = score;
+    for (std::size_t i = first; i < last; ++i) z.data()[order[i].second] = score;
     first = last;
   }
   return z;
@@ -120,12 +120,32 @@ double rhat_bulk(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
   return basic_rhat(rank_normalise(split_chains(draws)));
 }
 
-double rhat_tail(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
-  if (degenerate(draws)) return kNaN;
-  const double median = sample_quantile(draws, 0.5);
+// The public functions take the draws alone; these take what the summary computes once.
+namespace {
+
+double rhat_tail_about(const Eigen::Ref<const Eigen::MatrixXd>& draws, double median) {
   const Eigen::MatrixXd folded = (draws.array() - median).abs().matrix();
   if (degenerate(folded)) return kNaN;
   return basic_rhat(rank_normalise(split_chains(folded)));
+}
+
+// ESS of the indicator chains I(θ <= threshold), split.
+double ess_at_or_below(const Eigen::Ref<const Eigen::MatrixXd>& draws, double threshold) {
+  const Eigen::MatrixXd below = (draws.array() <= threshold).cast<double>().matrix();
+  return multi_chain_effective_sample_size(split_chains(below));
+}
+
+void check_probability(const char* function, double p) {
+  if (!(p > 0.0 && p < 1.0))
+    throw std::invalid_argument(std::string(function) + ": p is " + std::to_string(p) +
+                                ", but must be in (0, 1)");
+}
+
+}  // namespace
+
+double rhat_tail(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
+  if (degenerate(draws)) return kNaN;
+  return rhat_tail_about(draws, sorted_quantile_type7(sorted_draws(draws), 0.5));
 }
 
 double rhat(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
@@ -140,12 +160,9 @@ double ess_bulk(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
 }
 
 double ess_quantile(const Eigen::Ref<const Eigen::MatrixXd>& draws, double p) {
-  if (!(p > 0.0 && p < 1.0))
-    throw std::invalid_argument("ess_quantile: p is " + std::to_string(p) + ", but must be in (0, 1)");
+  check_probability("ess_quantile", p);
   if (degenerate(draws)) return kNaN;
-  const double q = sample_quantile(draws, p);
-  const Eigen::MatrixXd below = (draws.array() <= q).cast<double>().matrix();
-  return multi_chain_effective_sample_size(split_chains(below));
+  return ess_at_or_below(draws, sorted_quantile_type7(sorted_draws(draws), p));
 }
 
 double ess_tail(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
@@ -164,10 +181,10 @@ double mcse_mean(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
 }
 
 double mcse_quantile(const Eigen::Ref<const Eigen::MatrixXd>& draws, double p) {
-  const double ess = ess_quantile(draws, p);
-  std::vector<double> sorted = all_draws(draws);
-  std::sort(sorted.begin(), sorted.end());
-  return quantile_mcse(sorted, ess, p);
+  check_probability("mcse_quantile", p);
+  if (degenerate(draws)) return kNaN;
+  const std::vector<double> sorted = sorted_draws(draws);
+  return quantile_mcse(sorted, ess_at_or_below(draws, sorted_quantile_type7(sorted, p)), p);
 }
 
 ConvergenceSummary summarise_convergence(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
@@ -179,18 +196,18 @@ ConvergenceSummary summarise_convergence(const Eigen::Ref<const Eigen::MatrixXd>
   out.draws_per_chain = draws.rows();
   out.mean = draws.mean();
   out.sd = sample_sd(draws);
-  std::vector<double> values = all_draws(draws);
-  std::sort(values.begin(), values.end());
-  out.q05 = quantile_type7(values, 0.05);
-  out.q50 = quantile_type7(values, 0.5);
-  out.q95 = quantile_type7(values, 0.95);
+  const std::vector<double> values = sorted_draws(draws);
+  out.q05 = sorted_quantile_type7(values, 0.05);
+  out.q50 = sorted_quantile_type7(values, 0.5);
+  out.q95 = sorted_quantile_type7(values, 0.95);
+  const bool undefined = degenerate(draws);
   out.rhat_bulk = rhat_bulk(draws);
-  out.rhat_tail = rhat_tail(draws);
+  out.rhat_tail = undefined ? kNaN : rhat_tail_about(draws, out.q50);
   out.rhat =
       std::isnan(out.rhat_bulk) || std::isnan(out.rhat_tail) ? kNaN : std::max(out.rhat_bulk, out.rhat_tail);
   out.ess_bulk = ess_bulk(draws);
-  out.ess_q05 = ess_quantile(draws, 0.05);
-  out.ess_q95 = ess_quantile(draws, 0.95);
+  out.ess_q05 = undefined ? kNaN : ess_at_or_below(draws, out.q05);
+  out.ess_q95 = undefined ? kNaN : ess_at_or_below(draws, out.q95);
   out.ess_tail =
       std::isnan(out.ess_q05) || std::isnan(out.ess_q95) ? kNaN : std::min(out.ess_q05, out.ess_q95);
   out.ess_mean = ess_mean(draws);
@@ -200,7 +217,8 @@ ConvergenceSummary summarise_convergence(const Eigen::Ref<const Eigen::MatrixXd>
   return out;
 }
 
-std::vector<ConvergenceSummary> summarise_parameters(const std::vector<Eigen::MatrixXd>& chains) {
+std::vector<ConvergenceSummary> summarise_parameters(const std::vector<Eigen::MatrixXd>& chains,
+                                                     const ParallelRange& parallel) {
   if (chains.empty()) throw std::invalid_argument("summarise_parameters: no chains");
   const Eigen::Index n = chains.front().rows(), k = chains.front().cols();
   for (std::size_t c = 1; c < chains.size(); ++c)
@@ -209,14 +227,16 @@ std::vector<ConvergenceSummary> summarise_parameters(const std::vector<Eigen::Ma
                                   std::to_string(chains[c].rows()) + " × " +
                                   std::to_string(chains[c].cols()) + ", but chain 0 is " + std::to_string(n) +
                                   " × " + std::to_string(k));
-  std::vector<ConvergenceSummary> out;
-  out.reserve(static_cast<std::size_t>(k));
-  Eigen::MatrixXd draws(n, static_cast<Eigen::Index>(chains.size()));
-  for (Eigen::Index j = 0; j < k; ++j) {
-    for (std::size_t c = 0; c < chains.size(); ++c)
-      draws.col(static_cast<Eigen::Index>(c)) = chains[c].col(j);
-    out.push_back(summarise_convergence(draws));
-  }
+  std::vector<ConvergenceSummary> out(static_cast<std::size_t>(k));
+  // Each parameter is summarised on its own, so the chunking cannot change a bit.
+  parallel(k, [&](Eigen::Index begin, Eigen::Index end) {
+    Eigen::MatrixXd draws(n, static_cast<Eigen::Index>(chains.size()));
+    for (Eigen::Index j = begin; j < end; ++j) {
+      for (std::size_t c = 0; c < chains.size(); ++c)
+        draws.col(static_cast<Eigen::Index>(c)) = chains[c].col(j);
+      out[static_cast<std::size_t>(j)] = summarise_convergence(draws);
+    }
+  });
   return out;
 }
 

@@ -40,6 +40,8 @@
 
 #include <Eigen/Core>
 
+#include "util/parallel_range.hpp"
+
 namespace ssrfleet::util {
 
 // One quantity's diagnostics, with the summaries a reader compares them to.
@@ -90,7 +92,9 @@ ConvergenceSummary summarise_convergence(const Eigen::Ref<const Eigen::MatrixXd>
 
 // A set of parameters: chains[c] is chain c, draws × parameters, every chain of one shape (as a
 // sampler records them); the result has one summary per parameter, in column order. Throws
-// std::invalid_argument for no chains or chains of different shapes.
-std::vector<ConvergenceSummary> summarise_parameters(const std::vector<Eigen::MatrixXd>& chains);
+// std::invalid_argument for no chains or chains of different shapes. The parameters may be
+// summarised in parallel (each on its own: the same bits for any chunking).
+std::vector<ConvergenceSummary> summarise_parameters(const std::vector<Eigen::MatrixXd>& chains,
+                                                     const ParallelRange& parallel = serial_range);
 
 }  // namespace ssrfleet::util
