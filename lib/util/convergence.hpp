@@ -27,13 +27,14 @@
 //   ESS of the mean  ESS of the split chains themselves (meaningful for finite variance only).
 //
 // MCSE. Of the mean: sd(θ) / √(ESS of the mean), sd over all draws (divisor S-1). Of a quantile
-// q_p (the paper's method, Stan's mcse_quantile): with E = ESS of q_p, the Beta(E p + 1,
-// E (1-p) + 1) distribution of the probability below q̂_p has its Φ(-1) and Φ(1) quantiles a₋ and
-// a₊; the sorted draws θ_(1) <= … <= θ_(S) give the interval [θ_(max(⌊a₋ S⌋, 1)),
-// θ_(min(⌈a₊ S⌉, S))], one posterior sd wide on each side, and the MCSE is its half width.
+// q_p (the paper's method; mcse_quantile of the R package posterior): with E = ESS of q_p, the
+// Beta(E p + 1, E (1-p) + 1) distribution of the probability below q̂_p has its Φ(-1) and Φ(1)
+// quantiles a₋ and a₊; the sorted draws θ_(1) <= … <= θ_(S) give the interval
+// [θ_(max(⌊a₋ S⌋, 1)), θ_(min(⌈a₊ S⌉, S))], about one Monte Carlo sd of q̂_p on each side, and
+// the MCSE is its half width.
 //
-// Undefined values are NaN (never thrown): any non-finite draw, draws all equal, or chains shorter
-// than the estimators need (R̂: 2 draws a split chain; ESS: 4).
+// Undefined values are NaN, not errors: any non-finite draw, draws all equal, or chains shorter
+// than the estimators need (R̂: 2 draws a split chain; ESS: 4). Only malformed arguments throw.
 #pragma once
 
 #include <vector>

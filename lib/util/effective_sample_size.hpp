@@ -13,13 +13,13 @@
 // so that between-chain differences lower every ρ(t) and with it the ESS. The pairs
 // P_k = ρ(2k) + ρ(2k+1) are positive, decreasing and convex for a reversible chain: the sum runs
 // over the initial positive pairs (stopping at lag N-4 at the latest), each clipped to its
-// predecessor, and the even term of the first pair not taken is added when positive, which
-// lowers the variance for antithetic chains:
+// predecessor, and the even term ρ(2K) of the first pair not summed is added when it is positive
+// or that pair's sum is not negative, which lowers the variance for antithetic chains:
 //
 //   τ = -1 + 2 Σ_{k<K} P_k + ρ(2K),   ESS = M N / τ,   τ >= 1 / log10(M N),
 //
 // the floor on τ capping the ESS at M N log10(M N), since antithetic chains can otherwise report
-// absurd values. One chain (M = 1) gives ρ(t) = γ(t)/γ(0), Geyer's own estimator.
+// absurd values. One chain (M = 1) gives ρ(t) = γ(t)/γ(0): Geyer's estimator with those two additions.
 //
 // The autocovariances come from one FFT of the zero-padded chain, so the cost is O(N log N) a chain.
 #pragma once
