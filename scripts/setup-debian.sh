@@ -14,9 +14,10 @@ set -euo pipefail
 main_packages=(build-essential cmake libeigen3-dev libboost-dev libboost-program-options-dev
                nlohmann-json3-dev libsqlite3-dev gnuplot-nox)
 # Beyond the main job: git (CI clones the checkout), Catch2 (tests), sqlite3 (the tests query the
-# history), GNU parallel (scripts/fit-sites.sh), Open MPI (ssrfleet-mpi and its test), help2man
-# (the man pages).
-full_packages=("${main_packages[@]}" git catch2 sqlite3 parallel libopenmpi-dev openmpi-bin help2man)
+# history), python3-numpy (the independent check of the convergence diagnostics), GNU parallel
+# (scripts/fit-sites.sh), Open MPI (ssrfleet-mpi and its test), help2man (the man pages).
+full_packages=("${main_packages[@]}" git catch2 sqlite3 python3-numpy parallel libopenmpi-dev openmpi-bin
+               help2man)
 case "${1:-}" in
   --main) packages=("${main_packages[@]}") ;;
   "") packages=("${full_packages[@]}") ;;

@@ -10,14 +10,19 @@
 
 namespace ssrfleet {
 
+// The p-quantile, p in [0, 1], of values already sorted ascending. Empty input is an error.
+inline double sorted_quantile_type7(const std::vector<double>& sorted, double p) {
+  if (sorted.empty()) throw std::invalid_argument("quantile_type7: no values");
+  const double h = (static_cast<double>(sorted.size()) - 1.0) * p;
+  const auto lo = static_cast<std::size_t>(std::floor(h));
+  const std::size_t hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (h - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
+}
+
 // Sorts `values` in place and returns the p-quantile, p in [0, 1]. Empty input is an error.
 inline double quantile_type7(std::vector<double>& values, double p) {
-  if (values.empty()) throw std::invalid_argument("quantile_type7: no values");
   std::sort(values.begin(), values.end());
-  const double h = (static_cast<double>(values.size()) - 1.0) * p;
-  const auto lo = static_cast<std::size_t>(std::floor(h));
-  const std::size_t hi = std::min(lo + 1, values.size() - 1);
-  return values[lo] + (h - static_cast<double>(lo)) * (values[hi] - values[lo]);
+  return sorted_quantile_type7(values, p);
 }
 
 // The p-quantile of a weighted sample (weights >= 0, not all 0; normalised here): type 7
