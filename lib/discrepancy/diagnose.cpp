@@ -26,19 +26,22 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-// A fitted SMC together with the extension it points at (which must outlive it). The base model
-// runs on the marginal core (docs/inference.md): its checks draw every truck's latents from their exact
-// conditional given θ (marginal_draws.hpp). An extension's refit runs on the latent core, which
-// carries ψ in its particles and re-simulates every kept truck when ψ moves: the marginal core's
-// tables hold one forward model, and the effects that change it (a sensor's gain, the dynamics, a
-// profile defect) would each need tables over a grid of ψ (either core serves at diagnose sizes
-// of about 100 trucks; docs/inference.md says which model runs on which core).
+// A fitted SMC together with the extension it points at (which must outlive it). Each model runs on
+// the core `fit` chooses for it (OnlineFitOptions::default_core; docs/inference.md): the base model
+// and second_class on the marginal core, whose checks draw every truck's latents from their exact
+// conditional given (θ, ψ) (marginal_draws.hpp); an effect that changes the forward model on the
+// latent core, which carries ψ in its particles and re-simulates every kept truck when ψ moves (the
+// marginal core's tables hold one forward model).
 struct Fitted {
   std::unique_ptr<fleet::ModelExtension> extension;
   std::unique_ptr<fleet::OnlineFit> online;
   ModelFit fit;
-  const fleet::FleetSmc& smc() const { return *online->latent(); }
 };
+
+long long integrator_passes(const fleet::OnlineFit& fit) {
+  if (const fleet::FleetSmc* latent = fit.latent()) return latent->target().integrator_passes();
+  return fit.marginal()->target().integrator_passes();
+}
 
 // The fit of one model. An extension's refit takes its new trucks' latents from `proposals` (the
 // base fit's tables) when given, and runs no final sweeps: finish() runs them on the one chosen.
@@ -48,12 +51,12 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
   Fitted f;
   f.extension = std::move(extension);
   fleet::OnlineFitOptions so;
-  so.core = f.extension ? fleet::OnlineFitOptions::Core::kLatent : fleet::OnlineFitOptions::Core::kMarginal;
+  so.core = fleet::OnlineFitOptions::default_core(f.extension.get());
   so.sampler().particles = o.particles;
   so.sampler().threads = o.threads;
   so.sampler().seed = o.seed;
   so.extension = f.extension.get();
-  so.latent.proposals = f.extension ? proposals : nullptr;
+  so.latent.proposals = f.extension && so.core == fleet::OnlineFitOptions::Core::kLatent ? proposals : nullptr;
   f.online = fleet::make_online_fit(site, so);
   const std::string label = f.extension ? f.extension->name() : std::string("base model");
   const auto start = Clock::now();
@@ -70,10 +73,7 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
   fleet::replay(*f.online, records, replay);
   f.fit.log_evidence = f.online->sampler().log_evidence();
   f.fit.wall_s = seconds_since(start);
-  if (const fleet::FleetSmc* latent = f.online->latent())
-    f.fit.integrator_passes = latent->target().integrator_passes();
-  else
-    f.fit.integrator_passes = f.online->marginal()->target().integrator_passes();
+  f.fit.integrator_passes = integrator_passes(*f.online);
   // The posterior as fit reports it (on the marginal core, the final sweeps' clouds pooled).
   const auto hyper = fleet::summarise_cloud(f.online->cloud());
   std::copy(hyper.begin(), hyper.end(), f.fit.hyper.begin());
@@ -88,7 +88,7 @@ void finish(Fitted& f, const DiagnoseOptions& o) {
   const auto start = Clock::now();
   f.online->rejuvenate(sweeps);
   f.fit.wall_s += seconds_since(start);
-  f.fit.integrator_passes = f.online->latent()->target().integrator_passes();
+  f.fit.integrator_passes = integrator_passes(*f.online);
   const auto hyper = fleet::summarise_cloud(f.online->cloud());
   std::copy(hyper.begin(), hyper.end(), f.fit.hyper.begin());
 }
@@ -96,7 +96,8 @@ void finish(Fitted& f, const DiagnoseOptions& o) {
 std::vector<ParameterEstimate> extension_estimates(const Fitted& f) {
   std::vector<ParameterEstimate> out;
   const auto& params = f.extension->parameters();
-  const auto summary = fleet::summarise_weighted(f.smc().target().psi(), f.smc().sampler().weights());
+  const fleet::PosteriorCloud cloud = f.online->cloud();
+  const auto summary = fleet::summarise_weighted(cloud.psi, cloud.weights);
   for (std::size_t j = 0; j < params.size(); ++j) out.push_back({params[j].name, params[j].unit, params[j].null_value, summary[j]});
   return out;
 }
@@ -106,7 +107,8 @@ CheckReport check(const site::Site& site, const Fitted& f, const DiagnoseOptions
   co.alpha = o.alpha;
   co.replicates = o.replicates;
   co.seed = o.seed;
-  if (f.online->latent() != nullptr) return run_checks(posterior_draws(site, f.smc(), o.draws, o.seed, o.threads), co);
+  if (const fleet::FleetSmc* latent = f.online->latent())
+    return run_checks(posterior_draws(site, *latent, o.draws, o.seed, o.threads), co);
   MarginalDrawOptions d;
   d.draws = o.draws;
   d.seed = o.seed;

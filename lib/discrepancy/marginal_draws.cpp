@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "model/extension_conditionals.hpp"
 #include "model/fleet_model.hpp"
 #include "model/table_proposal.hpp"
 #include "smc/parallel.hpp"
@@ -21,10 +22,11 @@ constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 // log p(y | x, σ) + log p(x | θ), the fleet model's densities: the exact target of the MH
 // correction, from the IFs of one integrator pass at x.
 double log_target(const Eigen::Ref<const Eigen::VectorXd>& observed, const Eigen::Ref<const Eigen::ArrayXd>& model_if,
-                  const model::TruckLatent& x, const fleet::HyperVector& theta, const fleet::LateralRange& range) {
+                  const model::TruckLatent& x, const fleet::HyperVector& theta, const fleet::ModelExtension* extension,
+                  const double* psi, const fleet::LateralRange& range) {
   const double ssr = (observed.array() - model_if).square().sum();
   return fleet::log_likelihood_from_ssr(ssr, static_cast<int>(observed.size()), theta[fleet::kSigmaIf]) +
-         fleet::log_latent_density(x.stiffness_npm, x.tyre_stiffness_npm, x.lateral_m, theta, range);
+         fleet::log_latent_density(extension, psi, x.stiffness_npm, x.tyre_stiffness_npm, x.lateral_m, theta, range);
 }
 
 }  // namespace
@@ -40,6 +42,14 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
 TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::MarginalTarget& target,
                                     const fleet::HyperVector& theta, const smc::RngFactory& streams, int mh_steps,
                                     const std::vector<std::size_t>& trucks, MarginalDrawStats* stats) {
+  return draw_truck_latents(site, target, theta, nullptr, streams, mh_steps, trucks, stats);
+}
+
+TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::MarginalTarget& target,
+                                    const fleet::HyperVector& theta, const double* psi, const smc::RngFactory& streams,
+                                    int mh_steps, const std::vector<std::size_t>& trucks, MarginalDrawStats* stats) {
+  const fleet::ModelExtension* extension = psi != nullptr ? target.extension() : nullptr;
+  const model::ThetaTerms terms = target.terms_for(target.marginal(), theta, psi);
   // Every truck's table, in truck order: a target on one rank (diagnose runs on one process).
   if (target.ranks().size() != 1) throw std::logic_error("draw_truck_latents: needs every truck's table (one rank)");
   const auto n = static_cast<Eigen::Index>(trucks.size());
@@ -60,7 +70,7 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
   for (Eigen::Index i = 0; i < n; ++i) {
     const std::size_t t = trucks[static_cast<std::size_t>(i)];
     rng.push_back(streams.stream(static_cast<std::uint64_t>(t)));
-    proposal.emplace_back(target.tables().view(t), target.marginal(), theta);
+    proposal.emplace_back(target.tables().view(t), target.marginal(), terms);
     batch.speed_mps[i] = target.absorbed().speed_mps(t);
     batch.sprung_mass_kg[i] = target.absorbed().sprung_mass_kg(t);
   }
@@ -96,7 +106,8 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
       const auto t = static_cast<std::size_t>(i);
       if (step > 0) ++proposals;
       if (!admissible[t]) continue;
-      const double lp = log_target(target.absorbed().impact_factors(trucks[t]), g.col(i), y[t], theta, range);
+      const double lp =
+          log_target(target.absorbed().impact_factors(trucks[t]), g.col(i), y[t], theta, extension, psi, range);
       const double lq = proposal[t].log_density(y[t]);
       bool take = step == 0;
       if (!take) {
@@ -145,6 +156,8 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::MarginalSmc&
   out.stiffness_pit.assign(chosen.size(), Eigen::VectorXd());
   out.tyre_stiffness_pit.assign(chosen.size(), Eigen::VectorXd());
   std::vector<MarginalDrawStats> per_draw(chosen.size());
+  std::vector<std::size_t> all_trucks(static_cast<std::size_t>(n));
+  for (std::size_t t = 0; t < all_trucks.size(); ++t) all_trucks[t] = t;
   const smc::ParallelFor parallel(o.threads);
   parallel(static_cast<Eigen::Index>(chosen.size()), [&](Eigen::Index begin, Eigen::Index end) {
     for (Eigen::Index d = begin; d < end; ++d) {
@@ -152,14 +165,19 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::MarginalSmc&
       const Eigen::Index p = chosen[slot];
       fleet::HyperVector theta;
       for (int j = 0; j < fleet::kHyperCount; ++j) theta[static_cast<std::size_t>(j)] = target.theta()(j, p);
+      const fleet::ModelExtension* extension = target.extension();
+      const Eigen::VectorXd psi = target.psi().rows() > 0 ? Eigen::VectorXd(target.psi().col(p)) : Eigen::VectorXd();
+      const double* psi_data = extension != nullptr ? psi.data() : nullptr;
       // Each (draw, truck) has its own stream: the draws do not depend on the thread count.
-      TruckLatentDraws drawn =
-          draw_truck_latents(site, target, theta, root.child(1, static_cast<std::uint64_t>(d)), o.mh_steps, &per_draw[slot]);
+      TruckLatentDraws drawn = draw_truck_latents(site, target, theta, psi_data, root.child(1, static_cast<std::uint64_t>(d)),
+                                                  o.mh_steps, all_trucks, &per_draw[slot]);
       Eigen::VectorXd lateral(n), pit(n), tyre_pit(n);
       for (Eigen::Index i = 0; i < n; ++i) {
         const auto& x = drawn.latents[static_cast<std::size_t>(i)];
         lateral[i] = x.lateral_m;
-        pit[i] = fleet::normal_cdf((x.stiffness_npm - theta[fleet::kK]) / theta[fleet::kSigmaK]);
+        pit[i] = extension != nullptr && extension->edits_stiffness_distribution()
+                     ? extension->stiffness_cdf(psi_data, x.stiffness_npm, theta[fleet::kK], theta[fleet::kSigmaK])
+                     : fleet::normal_cdf((x.stiffness_npm - theta[fleet::kK]) / theta[fleet::kSigmaK]);
         tyre_pit[i] = fleet::normal_cdf((x.tyre_stiffness_npm - theta[fleet::kKt]) / theta[fleet::kSigmaKt]);
       }
       out.model_if[slot] = std::move(drawn.model_if);

@@ -47,6 +47,12 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
 TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::MarginalTarget& target,
                                     const fleet::HyperVector& theta, const smc::RngFactory& streams, int mh_steps,
                                     const std::vector<std::size_t>& trucks, MarginalDrawStats* stats = nullptr);
+// The same under the target's model extension at ψ (its stiffness distribution in both the
+// proposal and the exact target; psi null for the base model).
+TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::MarginalTarget& target,
+                                    const fleet::HyperVector& theta, const double* psi, const smc::RngFactory& streams,
+                                    int mh_steps, const std::vector<std::size_t>& trucks,
+                                    MarginalDrawStats* stats = nullptr);
 
 // UsageError on bad options. The draws' latents are exact draws from p(x_i | y_i, θ) up to the
 // MH chain's convergence from the table proposal.

@@ -216,7 +216,7 @@ void MarginalTarget::note_k_range(const model::TruckTable& table, int& lo, int& 
 
 model::ThetaTerms MarginalTarget::terms_for(const model::FleetMarginal& marginal, const HyperVector& theta,
                                             const double* psi) const {
-  if (psi_dim() == 0 || !options_.extension->edits_stiffness_distribution()) return marginal.prepare(theta);
+  if (psi == nullptr || psi_dim() == 0 || !options_.extension->edits_stiffness_distribution()) return marginal.prepare(theta);
   const bool old = old_marginal_ && &marginal == &*old_marginal_;
   return marginal.prepare(theta, options_.extension->stiffness_mixture(psi, theta[kK], theta[kSigmaK]),
                           old ? old_k_lo_ : k_lo_, old ? old_k_hi_ : k_hi_);

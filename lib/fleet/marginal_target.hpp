@@ -202,7 +202,7 @@ class MarginalTarget final : public smc::TemperedModel {
   // parameters (ignored without one).
   double log_posterior(const HyperVector& theta, const double* psi = nullptr) const;
   // What ℓ_i needs of (θ, ψ) on a FleetMarginal of this target (the extension's stiffness mixture
-  // tabulated over the k indices its tables use).
+  // tabulated over the k indices its tables use; psi null: the base model's).
   model::ThetaTerms terms_for(const model::FleetMarginal& marginal, const HyperVector& theta, const double* psi) const;
 
   // Checkpoint: the particles, the data and the tables (so a resume does not rebuild them).

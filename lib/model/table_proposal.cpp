@@ -16,8 +16,10 @@ namespace {
 constexpr double kMinLateralSdM = 1e-4;
 }  // namespace
 
-TableProposal::TableProposal(const TableView& table, const FleetMarginal& marginal, const fleet::HyperVector& theta) {
-  const ThetaTerms terms = marginal.prepare(theta);
+TableProposal::TableProposal(const TableView& table, const FleetMarginal& marginal, const fleet::HyperVector& theta)
+    : TableProposal(table, marginal, marginal.prepare(theta)) {}
+
+TableProposal::TableProposal(const TableView& table, const FleetMarginal& marginal, const ThetaTerms& terms) {
   if (!terms.inside) throw UsageError("TableProposal: theta is outside the fleet model's support");
   const std::size_t n = table.nodes;
   std::vector<float> e(n);

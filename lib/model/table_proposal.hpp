@@ -35,6 +35,9 @@ class TableProposal {
   // `marginal` holds the lattice the table was built on. UsageError if θ is outside the support
   // or the table carries no weight at θ.
   TableProposal(const TableView& table, const FleetMarginal& marginal, const fleet::HyperVector& theta);
+  // The same from θ's terms as prepared for the fleet's stiffness distribution (an extension's
+  // mixture weighting the nodes: FleetMarginal::prepare).
+  TableProposal(const TableView& table, const FleetMarginal& marginal, const ThetaTerms& terms);
 
   template <class Engine>
   TruckLatent draw(Engine& engine) const;
