@@ -6,9 +6,10 @@
 //            fit gives the peak and the curvature, so ψ's posterior sd given θ* at n trucks, and
 //            (× √(n / n')) at n'.
 //   interp   E(ψ) = Σ_i (ℓ_i,interp(θ, ψ) - ℓ_i,direct(θ, ψ)) on a subset of trucks at 9 ψ spread
-//            across each window, for Q = 3, 5, 7, 9 Chebyshev nodes (and 17 on the box), windows:
-//            the prior box and the profile peak ± 4 and ± 6 posterior sd at n = 1,000 and 10,000
-//            (given θ*, a lower bound on the marginal sd: real windows are wider). Reported: max - min of
+//            across each window, for Q = 3, 5, 7, 9 Chebyshev nodes (17 and 33 on the box, and the
+//            box also in log ψ when positive). Windows: the prior box, and the profile peak ± 6
+//            posterior sd at n = 20, 50, 200, 1,000, 10,000 and ± 4 at the last two (the sd given
+//            θ*, a lower bound on the marginal sd: real windows are wider). Reported: max - min of
 //            E over the 9 ψ per truck and scaled to the window's n (× n / subset: exact if every
 //            truck erred alike, an over-estimate if their errors are independent), at θ* and at θ*
 //            moved by one posterior sd at that n in K (sd ≈ √(σ_k² + lik_k²) / √n) and in σ_z
@@ -211,8 +212,8 @@ int main(int argc, char** argv) {
 
   const model::FleetMarginal marginal(
       site.sensors(), fleet::LateralRange{site.lateral_min_m(), site.lateral_max_m()}, s.lattice);
-  // θ*, and θ* moved one posterior sd in K and in σ_z at n = 200, 1,000, 10,000.
-  const std::vector<int> ns{200, 1000, 10000};
+  // θ*, and θ* moved one posterior sd in K and in σ_z at each n of ns.
+  const std::vector<int> ns{20, 50, 200, 1000, 10000};
   std::vector<fleet::HyperVector> thetas{th};
   for (int n : ns) {
     fleet::HyperVector a = th, b = th;
@@ -358,9 +359,10 @@ int main(int argc, char** argv) {
   std::vector<Window> windows{{"box", n_trucks, {box_lo, box_hi}}};
   // A box of positive ψ also with its nodes evenly spread in log ψ (Chebyshev in log ψ).
   if (box_lo > 0.0) windows.push_back({"box-log", n_trucks, {std::log(box_lo), std::log(box_hi)}, true});
-  for (int n : {1000, 10000}) {
+  for (int n : {20, 50, 200, 1000, 10000}) {
     const double sd = sd200 * std::sqrt(static_cast<double>(n_trucks) / n);
     for (double h : {4.0, 6.0}) {
+      if (n < 1000 && h < 5.0) continue;  // small n: the ± 6 sd window only
       model::PsiWindowRule rule;
       rule.half_width_sd = h;
       windows.push_back({"+-" + std::to_string(static_cast<int>(h)) + "sd@" + std::to_string(n), n,
@@ -375,8 +377,8 @@ int main(int argc, char** argv) {
   std::printf("  %-14s %-22s %2s %11s %11s %11s %11s %11s\n", "window", "[lo, hi]", "Q", "per truck",
               "scaled", "scaled K+sd", "scaled sz+sd", "max|e_i|");
   for (const Window& win : windows) {
-    // θ columns: 0 = θ*, then (K, σ_z) pairs for n = 200, 1,000, 10,000.
-    const int nidx = win.n <= 200 ? 0 : (win.n <= 1000 ? 1 : 2);
+    // θ columns: 0 = θ*, then (K, σ_z) pairs for each n of ns.
+    const int nidx = static_cast<int>(std::find(ns.begin(), ns.end(), win.n) - ns.begin());
     const std::vector<int> cols{0, 1 + 2 * nidx, 2 + 2 * nidx};
     std::vector<double> evals;
     for (int j = 0; j < 9; ++j) evals.push_back(win.w.lo + (win.w.hi - win.w.lo) * (j + 0.5) / 9.0);
