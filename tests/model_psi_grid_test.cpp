@@ -42,7 +42,7 @@ model::TruckTableOptions table1_options() {
   o.k_start_npm = 500e3;
   o.kt_start_npm = 1950e3;
   o.start_is_close = true;
-  o.max_piece_sd_m = 0.058;
+  o.max_piece_sd_m = 0.083;  // σ_z / 6, σ_z = 0.5 m
   return o;
 }
 
@@ -103,7 +103,7 @@ TEST_CASE("psi grid interpolation is exact for polynomials of degree below Q", "
   CHECK(std::abs(g3.interpolate(cube.data(), 0.25) - 0.015625) > 1e-3);
 }
 
-TEST_CASE("the psi window follows the posterior and asks for a rebuild when it narrows or moves",
+TEST_CASE("the psi window follows the posterior and tells a narrowed posterior from a moved one",
           "[psi_grid]") {
   model::PsiWindowRule rule;
   rule.half_width_sd = 6.0;
@@ -120,10 +120,17 @@ TEST_CASE("the psi window follows the posterior and asks for a rebuild when it n
   CHECK(w.lo == 0.0);
   CHECK(w.hi == Approx(400.0));
   const model::PsiWindow current{700.0, 1300.0};
-  CHECK_FALSE(model::psi_window_needs_rebuild(rule, current, 1000.0, 50.0, 0.0, 10e3));
-  CHECK_FALSE(model::psi_window_needs_rebuild(rule, current, 1050.0, 50.0, 0.0, 10e3));  // ±4 sd still inside
-  CHECK(model::psi_window_needs_rebuild(rule, current, 1150.0, 50.0, 0.0, 10e3));        // moved
-  CHECK(model::psi_window_needs_rebuild(rule, current, 1000.0, 20.0, 0.0, 10e3));        // narrowed 2.5x
+  using Check = model::PsiWindowCheck;
+  CHECK(model::check_psi_window(rule, current, 1000.0, 50.0, 0.0, 10e3) == Check::kKeep);
+  CHECK(model::check_psi_window(rule, current, 1050.0, 50.0, 0.0, 10e3) ==
+        Check::kKeep);  // ±4 sd still inside
+  CHECK(model::check_psi_window(rule, current, 1150.0, 50.0, 0.0, 10e3) ==
+        Check::kMoved);  // 1150 + 200 > 1300
+  CHECK(model::check_psi_window(rule, current, 1000.0, 20.0, 0.0, 10e3) ==
+        Check::kNarrowed);                                                                 // 240 < 0.5 x 600
+  CHECK(model::check_psi_window(rule, current, 1000.0, 30.0, 0.0, 10e3) == Check::kKeep);  // 360 > 300
+  // Against the box's end the window need not reach past it.
+  CHECK(model::check_psi_window(rule, {0.0, 400.0}, 100.0, 50.0, 0.0, 10e3) == Check::kKeep);
   CHECK_THROWS_AS(model::psi_window(rule, 1.0, 0.0, 0.0, 10e3), UsageError);
 }
 

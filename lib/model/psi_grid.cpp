@@ -83,13 +83,14 @@ PsiWindow psi_window(const PsiWindowRule& rule, double mean, double sd, double b
   return w;
 }
 
-bool psi_window_needs_rebuild(const PsiWindowRule& rule, const PsiWindow& current, double mean, double sd,
-                              double box_lo, double box_hi) {
+PsiWindowCheck check_psi_window(const PsiWindowRule& rule, const PsiWindow& current, double mean, double sd,
+                                double box_lo, double box_hi) {
   const PsiWindow ideal = psi_window(rule, mean, sd, box_lo, box_hi);
-  if (ideal.hi - ideal.lo < rule.too_wide * (current.hi - current.lo)) return true;
   const double inner = rule.inner_sd * sd;
   const double need_lo = std::max(box_lo, mean - inner), need_hi = std::min(box_hi, mean + inner);
-  return need_lo < current.lo || need_hi > current.hi;
+  if (need_lo < current.lo || need_hi > current.hi) return PsiWindowCheck::kMoved;
+  if (ideal.hi - ideal.lo < rule.too_wide * (current.hi - current.lo)) return PsiWindowCheck::kNarrowed;
+  return PsiWindowCheck::kKeep;
 }
 
 }  // namespace ssrfleet::model

@@ -17,11 +17,13 @@
 // grid only sees numbers): log ψ spreads the nodes where a likelihood changes fastest near the low
 // end of a positive box.
 //
-// Where the interval sits. Early the ψ posterior fills the prior box, so the interval is the box;
-// later it is the posterior mean ± half_width_sd posterior sd, clipped to the box. The window is
-// rebuilt (new tables at new nodes) when the posterior has left it or narrowed well inside it,
-// checked at the same geometrically spaced truck counts as the (k, k_t) lattice (rebuild_growth),
-// so the rebuilds cost O(1) per truck.
+// Where the interval sits. Early the ψ posterior fills the prior box; later the window is the
+// posterior mean ± half_width_sd posterior sd, clipped to the box. As the posterior narrows, the
+// tables already built stay valid (their window still holds the posterior; a wider window only
+// errs more per truck, and the earlier trucks are few), so only new trucks need the narrower
+// window: the sum over trucks of the per-window errors then stays bounded without rebuilding old
+// tables. Tables must be rebuilt only when the posterior has moved so that it is no longer well
+// inside their window.
 #pragma once
 
 #include <vector>
@@ -56,11 +58,11 @@ class PsiGrid {
 struct PsiWindowRule {
   int nodes = 5;               // Q
   double half_width_sd = 6.0;  // the window is mean ± this many posterior sd (clipped to the box)
-  // Rebuild when the ideal window is narrower than this fraction of the current one (the
-  // posterior has narrowed: the nodes are spread wider than they need be) ...
+  // New trucks get a new window when the ideal one is narrower than this fraction of the current
+  // one (the posterior has narrowed: a Q-node interpolant's error grows like width^Q).
   double too_wide = 0.5;
-  // ... or when mean ± this many sd is no longer inside the current window (the posterior has
-  // moved: the interpolant is then near, or past, its ends).
+  // Tables on a window must be rebuilt when mean ± this many sd is no longer inside it (the
+  // posterior has moved: the interpolant is then near, or past, its ends).
   double inner_sd = 4.0;
 };
 
@@ -72,10 +74,11 @@ struct PsiWindow {
 // posterior as broad as the box gets the box. UsageError unless box_lo < box_hi and sd > 0.
 PsiWindow psi_window(const PsiWindowRule& rule, double mean, double sd, double box_lo, double box_hi);
 
-// Whether a grid on `current` should be rebuilt for the posterior (mean, sd): it has moved so that
-// mean ± inner_sd sd leaves `current` (where the box allows more), or it has narrowed so that the
-// ideal window is narrower than too_wide × current's width.
-bool psi_window_needs_rebuild(const PsiWindowRule& rule, const PsiWindow& current, double mean, double sd,
-                              double box_lo, double box_hi);
+// What a window of tables means for the posterior (mean, sd): keep it; narrowed (the ideal window
+// is under too_wide × its width: new trucks should get psi_window(), the tables on it stay); or
+// moved (mean ± inner_sd sd leaves it, where the box allows more: the tables on it must be rebuilt).
+enum class PsiWindowCheck { kKeep, kNarrowed, kMoved };
+PsiWindowCheck check_psi_window(const PsiWindowRule& rule, const PsiWindow& current, double mean, double sd,
+                                double box_lo, double box_hi);
 
 }  // namespace ssrfleet::model
