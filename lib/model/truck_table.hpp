@@ -51,9 +51,10 @@ namespace ssrfleet::model {
 // tabulated: every pass of the search and of the table runs the extended forward model, so the
 // table holds ℓ_i(θ, ψ) at that ψ. Extensions that edit the pass (a vehicle constant, the speed)
 // and the output keep the line-bundled passes of the base table, at the same pass count; one that
-// adds a profile costs one more pass per (k, k_t) node; one that moves the lateral position is
-// refused (the lines are the lateral positions). With no extension (or one that edits nothing
-// forward) the table is the base model's, bit for bit.
+// adds a profile costs one more pass per (k, k_t) node (and the search's passes twice), which
+// TruckTable::passes does not count; one that moves the lateral position is refused (the lines
+// are the lateral positions). With no extension (or one that edits nothing forward) the table is
+// the base model's, bit for bit.
 struct ForwardEdit {
   const fleet::ModelExtension* extension = nullptr;
   std::vector<double> psi;  // extension->dim() values inside its prior box
