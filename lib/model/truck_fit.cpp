@@ -19,7 +19,7 @@ constexpr double kPoorFitRatio = 1.5;
 TruckFit fit_truck(const site::Site& site, double speed_mps, double sprung_mass_kg,
                    const Eigen::Ref<const Eigen::VectorXd>& impact_factors, const TruckTableOptions& options) {
   check_inputs(site, impact_factors);
-  Fitter fitter{site, speed_mps, sprung_mass_kg, impact_factors};
+  Fitter fitter{site, speed_mps, sprung_mass_kg, impact_factors, 0, detail::active_edit(options)};
   // Coarse start: every lateral line at a 3 x 3 spread of (k, k_t) around the hint. The
   // z-likelihood is multimodal across the road; the stiffnesses only shift its modes a little.
   std::vector<double> ks, kts;

@@ -11,17 +11,91 @@
 
 #include <Eigen/Dense>
 
+#include "model/extended_forward.hpp"
+#include "model/model_extension.hpp"
+#include "model/truck_table.hpp"
 #include "site/site.hpp"
 #include "util/errors.hpp"
 #include "util/parallel_range.hpp"
 
 namespace ssrfleet::model::detail {
 
+// The edit the passes run under, or null for the base model (none set, or an extension that
+// edits nothing forward). UsageError if ψ does not match the extension.
+inline const ForwardEdit* active_edit(const TruckTableOptions& options) {
+  const ForwardEdit& e = options.forward;
+  if (e.extension == nullptr || !e.extension->edits_forward()) return nullptr;
+  if (static_cast<Eigen::Index>(e.psi.size()) != e.extension->dim())
+    throw UsageError("truck table: extension " + e.extension->name() + " takes " + std::to_string(e.extension->dim()) +
+                     " parameters, " + std::to_string(e.psi.size()) + " given");
+  return &e;
+}
+
+// The passes of simulate() under an edit: the extended forward model (extended_forward.hpp).
+inline void simulate_edited(const site::Site& site, double speed_mps, double sprung_mass_kg, const std::vector<double>& k,
+                            const std::vector<double>& kt, const std::vector<double>& z, Eigen::Index begin,
+                            Eigen::Index end, const ForwardEdit& edit, Eigen::Ref<Eigen::ArrayXXd> out) {
+  std::vector<fleet::ExtendedPass> passes;
+  passes.reserve(static_cast<std::size_t>(end - begin));
+  for (Eigen::Index i = begin; i < end; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    passes.push_back({fleet::base_pass(site, speed_mps, sprung_mass_kg, k[u], kt[u], z[u]), edit.psi.data()});
+  }
+  fleet::simulate_passes(site, edit.extension, passes, out);
+}
+
+// simulate_on_lines()'s passes under an edit, nodes [begin, end): the pass edits go into each
+// car's constants and the speed, so the lines stay bundled; an added profile's effect (the same
+// on every line: the car is linear) is one more pass per node, added to each of its lines.
+inline void simulate_on_lines_edited(const site::Site& site, double speed_mps, double sprung_mass_kg,
+                                     const std::vector<double>& k, const std::vector<double>& kt,
+                                     const vehicle::LineBundle& lines, Eigen::Index begin, Eigen::Index end,
+                                     const ForwardEdit& edit, Eigen::Ref<Eigen::ArrayXXd> out) {
+  const fleet::ModelExtension& ext = *edit.extension;
+  const Eigen::Index n = end - begin, per_node = lines.lines();
+  vehicle::QuarterCarBatch cars;
+  cars.sprung_mass_kg.resize(n);
+  cars.unsprung_mass_kg.resize(n);
+  cars.suspension_stiffness_npm.resize(n);
+  cars.suspension_damping_nspm.resize(n);
+  cars.tyre_stiffness_npm.resize(n);
+  cars.tyre_damping_nspm.resize(n);
+  double speed = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto u = static_cast<std::size_t>(begin + i);
+    const fleet::PassSetup base = fleet::base_pass(site, speed_mps, sprung_mass_kg, k[u], kt[u], 0.0);
+    fleet::PassSetup s = base;
+    ext.edit_pass(edit.psi.data(), s);
+    if (s.lateral_m != base.lateral_m || (i > 0 && s.speed_mps != speed))
+      throw UsageError("truck table: extension " + ext.name() +
+                       " moves the lateral position or the speed per node, which line-bundled passes cannot run");
+    speed = s.speed_mps;
+    cars.sprung_mass_kg[i] = s.sprung_mass_kg;
+    cars.unsprung_mass_kg[i] = s.unsprung_mass_kg;
+    cars.suspension_stiffness_npm[i] = s.stiffness_npm;
+    cars.suspension_damping_nspm[i] = s.suspension_damping_nspm;
+    cars.tyre_stiffness_npm[i] = s.tyre_stiffness_npm;
+    cars.tyre_damping_nspm[i] = s.tyre_damping_nspm;
+  }
+  const vehicle::PassIntegrator& integrator = site.integrator();
+  integrator.run_on_lines(cars, speed, lines, out);
+  if (ext.adds_profile()) {
+    Eigen::ArrayXd profile = Eigen::ArrayXd::Zero(integrator.samples());
+    ext.add_profile(edit.psi.data(), integrator.dx_m(), profile);
+    const std::vector<vehicle::WheelPath> paths(static_cast<std::size_t>(n), {profile.data(), profile.data(), 0.0});
+    Eigen::ArrayXXd added(out.rows(), n);
+    integrator.run_batch(cars, Eigen::ArrayXd::Constant(n, speed), paths, added);
+    for (Eigen::Index i = 0; i < n; ++i)
+      out.middleCols(i * per_node, per_node).colwise() += added.col(i) - 1.0;
+  }
+  for (Eigen::Index c = 0; c < out.cols(); ++c) ext.edit_output(edit.psi.data(), out.col(c));
+}
+
 // Impact factors (sensors x passes) of the trucks at the given (k, k_t, z): batched calls on
 // chunks of the passes (each pass is independent, so the chunking changes no bit).
 inline Eigen::ArrayXXd simulate(const site::Site& site, double speed_mps, double sprung_mass_kg,
                          const std::vector<double>& k, const std::vector<double>& kt, const std::vector<double>& z,
-                         const util::ParallelRange& parallel = util::serial_range) {
+                         const util::ParallelRange& parallel = util::serial_range, const ForwardEdit* edit = nullptr) {
   const auto n = static_cast<Eigen::Index>(k.size());
   Eigen::ArrayXXd out(site.sensors(), n);
   // Chunks of whole integrator blocks; a small batch stays in one call.
@@ -29,6 +103,10 @@ inline Eigen::ArrayXXd simulate(const site::Site& site, double speed_mps, double
   const Eigen::Index chunks = (n + kChunk - 1) / kChunk;
   parallel(chunks, [&](Eigen::Index cb, Eigen::Index ce) {
     const Eigen::Index begin = cb * kChunk, end = std::min(n, ce * kChunk);
+    if (edit != nullptr) {
+      if (end > begin) simulate_edited(site, speed_mps, sprung_mass_kg, k, kt, z, begin, end, *edit, out.middleCols(begin, end - begin));
+      return;
+    }
     site::TruckBatch batch;
     batch.resize(end - begin);
     batch.speed_mps.setConstant(speed_mps);
@@ -50,7 +128,8 @@ inline Eigen::ArrayXXd simulate(const site::Site& site, double speed_mps, double
 inline Eigen::ArrayXXd simulate_on_lines(const site::Site& site, double speed_mps, double sprung_mass_kg,
                                          const std::vector<double>& k, const std::vector<double>& kt,
                                          const vehicle::LineBundle& lines,
-                                         const util::ParallelRange& parallel = util::serial_range) {
+                                         const util::ParallelRange& parallel = util::serial_range,
+                                         const ForwardEdit* edit = nullptr) {
   const auto n = static_cast<Eigen::Index>(k.size());
   const Eigen::Index per_node = lines.lines();
   Eigen::ArrayXXd out(site.sensors(), n * per_node);
@@ -59,6 +138,11 @@ inline Eigen::ArrayXXd simulate_on_lines(const site::Site& site, double speed_mp
   parallel(chunks, [&](Eigen::Index cb, Eigen::Index ce) {
     const Eigen::Index begin = cb * kNodesPerChunk, end = std::min(n, ce * kNodesPerChunk);
     if (end <= begin) return;
+    if (edit != nullptr) {
+      simulate_on_lines_edited(site, speed_mps, sprung_mass_kg, k, kt, lines, begin, end, *edit,
+                               out.middleCols(begin * per_node, (end - begin) * per_node));
+      return;
+    }
     const Eigen::ArrayXd mass = Eigen::ArrayXd::Constant(end - begin, sprung_mass_kg);
     Eigen::ArrayXd kk(end - begin), kkt(end - begin);
     for (Eigen::Index i = begin; i < end; ++i) {
@@ -93,6 +177,7 @@ struct Fitter {
   double speed, mass;
   const Eigen::Ref<const Eigen::VectorXd>& y;
   int passes = 0;
+  const ForwardEdit* edit = nullptr;  // the extension the passes run under (null: the base model)
 
   // Residuals at p and the Jacobian of the impact factors by forward differences.
   void residual_and_jacobian(const Point& p, Eigen::VectorXd& r, Eigen::MatrixXd& J) {
@@ -103,7 +188,7 @@ struct Fitter {
     std::vector<double> k{std::exp(p.log_k), std::exp(p.log_k + h_log), std::exp(p.log_k), std::exp(p.log_k)};
     std::vector<double> kt{std::exp(p.log_kt), std::exp(p.log_kt), std::exp(p.log_kt + h_log), std::exp(p.log_kt)};
     std::vector<double> z{p.z, p.z, p.z, std::clamp(p.z + dz, lo, hi)};
-    const Eigen::ArrayXXd f = simulate(site, speed, mass, k, kt, z);
+    const Eigen::ArrayXXd f = simulate(site, speed, mass, k, kt, z, util::serial_range, edit);
     passes += 4;
     r = y - f.col(0).matrix();
     J.resize(y.size(), 3);
@@ -113,7 +198,8 @@ struct Fitter {
   }
 
   double ssr_at(const Point& p) {
-    const Eigen::ArrayXXd f = simulate(site, speed, mass, {std::exp(p.log_k)}, {std::exp(p.log_kt)}, {p.z});
+    const Eigen::ArrayXXd f =
+        simulate(site, speed, mass, {std::exp(p.log_k)}, {std::exp(p.log_kt)}, {p.z}, util::serial_range, edit);
     passes += 1;
     return (f.col(0).matrix() - y).squaredNorm();
   }
@@ -167,7 +253,7 @@ struct Fitter {
         z.push_back(s.lateral_m(j));
       }
     }
-    const Eigen::ArrayXd ssr = column_ssr(simulate(site, speed, mass, k, kt, z), y);
+    const Eigen::ArrayXd ssr = column_ssr(simulate(site, speed, mass, k, kt, z, util::serial_range, edit), y);
     passes += static_cast<int>(k.size());
     Eigen::Index best = 0;
     const double best_ssr = ssr.minCoeff(&best);

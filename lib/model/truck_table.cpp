@@ -170,6 +170,7 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
   const road::Surface& surface = site.surface();
   const double u_ref = 1.0 / (options.sigma_ref * options.sigma_ref);
   const util::QuadratureRule rule = util::gauss_legendre01(options.points_per_segment);
+  const ForwardEdit* edit = detail::active_edit(options);
 
   // Lateral modes: scan the fit's (k, k_t) over every line of the road and keep the segments whose
   // least SSR is within keep_nats (at u_ref) of the best. Runs of such segments closer than
@@ -181,7 +182,7 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
   std::vector<double> seg_min;
   {
     const Eigen::ArrayXXd ifs = simulate_on_lines(site, speed_mps, sprung_mass_kg, {fit.stiffness_npm},
-                                                  {fit.tyre_stiffness_npm}, site.line_bundle(0, L), parallel);
+                                                  {fit.tyre_stiffness_npm}, site.line_bundle(0, L), parallel, edit);
     for (Eigen::Index j = 0; j + 1 < L; ++j) {
       const Eigen::VectorXd ea = impact_factors - ifs.col(j).matrix();
       const Eigen::VectorXd d = (ifs.col(j + 1) - ifs.col(j)).matrix();
@@ -238,7 +239,7 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
       }
     }
     const double fit_line = (fit.lateral_m - surface.y0_m) / surface.dy_m;
-    Fitter fitter{site, speed_mps, sprung_mass_kg, impact_factors};
+    Fitter fitter{site, speed_mps, sprung_mass_kg, impact_factors, 0, edit};
     for (std::size_t r = 0; r < runs.size(); ++r) {
       const auto [a, b] = runs[r];
       Mode m{std::max<Eigen::Index>(0, a - options.z_margin_lines), std::min<Eigen::Index>(L - 1, b + 1 + options.z_margin_lines),
@@ -334,7 +335,7 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
         k.push_back(lattice.k_at(i));
         kt.push_back(lattice.kt_at(j));
       }
-      const Eigen::ArrayXXd ifs = simulate_on_lines(site, speed_mps, sprung_mass_kg, k, kt, mode_lines, parallel);
+      const Eigen::ArrayXXd ifs = simulate_on_lines(site, speed_mps, sprung_mass_kg, k, kt, mode_lines, parallel, edit);
       table.passes += static_cast<int>(k.size() * static_cast<std::size_t>(lines));
       // Each node's z-integral is its own (in parallel, then gathered in order: the same bits).
       std::vector<std::vector<NodeResult>> results(pending.size());

@@ -41,7 +41,24 @@
 #include "site/site.hpp"
 #include "util/parallel_range.hpp"
 
+namespace ssrfleet::fleet {
+class ModelExtension;
+}
+
 namespace ssrfleet::model {
+
+// A model extension (model_extension.hpp) held at fixed parameters ψ while a truck is fitted and
+// tabulated: every pass of the search and of the table runs the extended forward model, so the
+// table holds ℓ_i(θ, ψ) at that ψ. Extensions that edit the pass (a vehicle constant, the speed)
+// and the output keep the line-bundled passes of the base table, at the same pass count; one that
+// adds a profile costs one more pass per (k, k_t) node (and the search's passes twice), which
+// TruckTable::passes does not count; one that moves the lateral position is refused (the lines
+// are the lateral positions). With no extension (or one that edits nothing forward) the table is
+// the base model's, bit for bit.
+struct ForwardEdit {
+  const fleet::ModelExtension* extension = nullptr;
+  std::vector<double> psi;  // extension->dim() values inside its prior box
+};
 
 // The (k, k_t) nodes shared by every truck's table: node (i, j) sits at
 // (k_origin + i dk, kt_origin + j dkt). The node sum is the rectangle rule on this infinite
@@ -103,6 +120,8 @@ struct TruckTableOptions {
     double mean_m = 0.0, sd_m = 0.0;
   };
   std::optional<LateralReference> lateral_check;
+  // The model the passes simulate: the base model unless an extension is set (ForwardEdit).
+  ForwardEdit forward;
 };
 
 // The best fit of (k, k_t, z) to one truck's impact factors, and the curvature of its
