@@ -1,12 +1,31 @@
 #include <algorithm>
 #include <iomanip>
+#include <ostream>
 
 #include "fit_methods.hpp"
 #include "fleet/batch_mcmc.hpp"
+#include "fleet/batch_mcmc_chains.hpp"
 #include "fleet/batch_mcmc_cloud.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::cli {
+
+namespace {
+// The chains' diagnostics, one line a parameter (R̂ above 1.01 is the usual sign of chains that
+// have not mixed: Vehtari et al. 2021).
+void print_convergence(std::ostream& out, const fleet::PosteriorCloud& cloud) {
+  out << "fit (mcmc): " << cloud.chains << " chains; R-hat, bulk-ESS, tail-ESS, MCSE of mean / q05 / q95:\n";
+  bool unmixed = false;
+  for (const auto& p : cloud.convergence) {
+    out << "  " << std::left << std::setw(10) << p.name << std::right << std::defaultfloat << std::setprecision(4)
+        << " R-hat " << p.rhat << "  ESS " << std::fixed << std::setprecision(0) << p.ess_bulk << " / " << p.ess_tail
+        << "  MCSE " << std::defaultfloat << std::setprecision(3) << p.mcse_mean << " / " << p.mcse_q05 << " / "
+        << p.mcse_q95 << "\n";
+    unmixed = unmixed || p.rhat > 1.01;
+  }
+  if (unmixed) out << "fit (mcmc): warning: R-hat above 1.01: the chains disagree; run more --iterations\n";
+}
+}  // namespace
 
 fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records::WimRecord>& records,
                                const FitFlags& flags, std::uint64_t seed, std::ostream* progress,
@@ -29,11 +48,16 @@ fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records
                 << " s\n";
     };
   }
+  o.threads = flags.threads;
+  fleet::BatchMcmcChainsOptions chains;
+  chains.chain = o;
+  chains.chains = flags.chains;
   std::string why;
-  if (!o.IsValid(&why)) throw UsageError(why);
-  const fleet::BatchMcmcResult r = fleet::run_batch_mcmc(site, records, o);
-
-  return fleet::to_posterior_cloud(r, site, records, extension);
+  if (!chains.IsValid(&why)) throw UsageError("--chains / MCMC options: " + why);
+  const auto results = fleet::run_batch_mcmc_chains(site, records, chains);
+  fleet::PosteriorCloud cloud = fleet::to_posterior_cloud(results, site, records, extension);
+  if (progress != nullptr && !cloud.convergence.empty()) print_convergence(*progress, cloud);
+  return cloud;
 }
 
 }  // namespace ssrfleet::cli

@@ -59,7 +59,10 @@ void FitFlags::add_to(po::options_description& desc) {
        "per block)");
   po::options_description mcmc("MCMC options (--method mcmc)");
   mcmc.add_options()
-      ("iterations", po::value(&iterations)->value_name("N")->default_value(iterations), "MCMC sweeps in all")
+      ("chains", po::value(&chains)->value_name("N")->default_value(chains),
+       "independent chains from over-dispersed starts, run side by side; their R-hat, bulk- and tail-ESS and "
+       "MCSE are printed and kept in the posterior file")
+      ("iterations", po::value(&iterations)->value_name("N")->default_value(iterations), "MCMC sweeps per chain")
       ("burn-in", po::value(&burn_in)->value_name("N")->default_value(burn_in),
        "sweeps discarded (proposal adaptation happens here)")
       ("thin", po::value(&thin)->value_name("N")->default_value(thin), "keep every N-th sweep");

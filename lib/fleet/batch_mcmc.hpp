@@ -109,6 +109,12 @@ struct BatchMcmcOptions {
   Init init = Init::kBestFit;
   double init_grid_step_m = 0.1;   // grid step of the initial z search (kGrid)
   int hold_theta_sweeps = 100;     // theta fixed for the first min(this, burn_in) sweeps
+  // Over-dispersion of θ's start (0: the start above, exactly). With d > 0 the start's K, K_t and Z
+  // move by 2d posterior-sd-like steps (the fleet sd / sqrt(N), times a standard normal) and the
+  // four sds are multiplied by exp(0.5 d × a standard normal), all clipped to the prior box, from a
+  // generator of their own seeded by `seed` (the chain's stream is untouched). Several chains
+  // (batch_mcmc_chains.hpp) start this way so that R̂ can see a chain that has not forgotten its start.
+  double start_dispersion = 0.0;
 
   // Progress: called every `progress_every` sweeps (0 = never) and after the last one.
   int progress_every = 0;

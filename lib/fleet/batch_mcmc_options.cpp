@@ -33,6 +33,8 @@ bool BatchMcmcOptions::IsValid(std::string* error) const {
   SSRFLEET_OPTION_CHECK(burn_in < iterations, "burn_in", burn_in,
                         "< iterations (" + std::to_string(iterations) + "), or no draw is kept");
   SSRFLEET_OPTION_CHECK(thin >= 1, "thin", thin, ">= 1");
+  SSRFLEET_OPTION_CHECK(start_dispersion >= 0.0 && start_dispersion <= 10.0, "start_dispersion", start_dispersion,
+                        "in [0, 10]");
   SSRFLEET_OPTION_CHECK(target_acceptance > 0.0 && target_acceptance < 1.0, "target_acceptance",
                         target_acceptance, "in (0, 1)");
   SSRFLEET_OPTION_CHECK(z_moves_per_sweep >= 1, "z_moves_per_sweep", z_moves_per_sweep, ">= 1");

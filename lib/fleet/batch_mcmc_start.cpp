@@ -4,6 +4,9 @@
 #include <cmath>
 #include <string>
 
+#include <boost/random/mersenne_twister.hpp>
+#include <boost/random/normal_distribution.hpp>
+
 #include "model/truck_table.hpp"
 #include "smc/engine.hpp"
 #include "util/errors.hpp"
@@ -121,6 +124,15 @@ ChainStart start_chain(const site::Site& site, const std::vector<records::WimRec
     theta[kZ] = clip_to_box(kZ, z.mean());
     theta[kSigmaZ] = clip_to_box(kSigmaZ, N > 2 ? column_sd(z) : 0.5);
     theta[kSigmaIf] = clip_to_box(kSigmaIf, std::sqrt(ssr.sum() / (static_cast<double>(N) * M)));
+    if (options.start_dispersion > 0.0) {
+      // A generator of its own (not the chain's), so the chain's stream is the same with or without.
+      boost::random::mt19937_64 engine(options.seed ^ 0x6f76657264697370ULL);
+      boost::random::normal_distribution<double> normal;
+      const double d = options.start_dispersion, root_n = std::sqrt(static_cast<double>(std::max<Eigen::Index>(N, 1)));
+      const std::pair<int, int> located[] = {{kK, kSigmaK}, {kKt, kSigmaKt}, {kZ, kSigmaZ}};
+      for (const auto& [mean, sd] : located) theta[mean] = clip_to_box(mean, theta[mean] + 2.0 * d * theta[sd] / root_n * normal(engine));
+      for (const int sd : {kSigmaK, kSigmaKt, kSigmaZ, kSigmaIf}) theta[sd] = clip_to_box(sd, theta[sd] * std::exp(0.5 * d * normal(engine)));
+    }
   }
   return s;
 }

@@ -31,6 +31,16 @@ struct SiteCalibration {
   std::vector<double> se;
 };
 
+// How well one parameter's draws are converged, from several independent chains
+// (fleet/batch_mcmc_chains.hpp; Vehtari et al. 2021): R̂ (rank-normalised split, the larger of bulk
+// and tail), bulk- and tail-ESS, and the Monte Carlo standard errors of the mean and of the 5 % and
+// 95 % quantiles.
+struct ParameterConvergence {
+  std::string name;
+  double rhat = 0.0, ess_bulk = 0.0, ess_tail = 0.0;
+  double mcse_mean = 0.0, mcse_q05 = 0.0, mcse_q95 = 0.0;
+};
+
 struct PosteriorCloud {
   std::string method;             // "smc" or "mcmc"
   Eigen::MatrixXd theta;          // kHyperCount x draws (fleet_model.hpp order)
@@ -43,6 +53,10 @@ struct PosteriorCloud {
   double lateral_min_m = 0.0, lateral_max_m = 0.0;
   long trucks_seen = 0;
   double ess = 0.0;               // SMC: the weights' ESS of one sweep's cloud (of the P particles)
+  // MCMC: the independent chains pooled in theta (their draws one after the other, equal counts),
+  // and each parameter's convergence over them (empty for one chain and for SMC).
+  int chains = 1;
+  std::vector<ParameterConvergence> convergence;
   // SMC: the number of final sweeps whose clouds are pooled in theta (each particle's weight shared
   // over its copies); 0: theta is the particles as they stand (an online stream, or no final sweeps).
   int pooled_sweeps = 0;

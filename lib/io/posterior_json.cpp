@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "io/atomic_file.hpp"
+#include "io/posterior_convergence_json.hpp"
 #include "model/fleet_model.hpp"
 #include "records/vehicle_class.hpp"
 #include "site/sensor_array.hpp"
@@ -74,6 +75,7 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vect
   j["particles"] = c.theta.cols();
   j["ess"] = c.ess;
   if (c.pooled_sweeps > 0) j["pooled_sweeps"] = c.pooled_sweeps;  // "particles" then counts every sweep's copy
+  write_convergence(c, j);
   j["log_evidence"] = number_or_null(c.log_evidence);
   j["method"] = c.method;
   j["model"] = c.model;
@@ -289,6 +291,7 @@ fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std:
   c.ess = get_field<double>(j, "ess", path, P);
   c.pooled_sweeps = j.contains("pooled_sweeps") ? get_field<int>(j, "pooled_sweeps", path, P) : 0;
   if (c.pooled_sweeps < 0) throw DataError(path, 0, P + "pooled_sweeps", "must be >= 0");
+  read_convergence(j, path, P, c);
   c.log_evidence = j.contains("log_evidence") && j["log_evidence"].is_number() ? j["log_evidence"].get<double>() : NAN;
   const auto& site = j.contains("site") ? j["site"] : nlohmann::json();
   c.site_fingerprint = get_field<std::string>(site, "fingerprint", path, P + "site.");
