@@ -5,7 +5,7 @@
 // at D posterior draws θ_d (the final cloud resampled by weight), its max - min over the draws,
 // the mean shift it implies for each hyperparameter in posterior sd (Cov_d(θ_j, E) / sd_j: a tilt
 // exp(E) moves a posterior mean by Cov(θ, E) to first order), and both split by error source:
-//   rectangle   the rectangle rule on the table's lattice (fleet sds guarded as FleetMarginal does),
+//   rectangle   the rectangle rule on the table's lattice (fleet sds floored as FleetMarginal does),
 //               z exact, against the exact reference (table_error_reference.hpp, a refined lattice)
 //   dropping    the table's kept nodes only, against every node of its lattice (z exact)
 //   laplace     the table's Laplace form in σ_IF (its c, m, b per node) with the exact lateral
@@ -15,7 +15,7 @@
 //               moved to the draw's σ_IF by the entry's slopes as FleetMarginal moves them), in double
 //   float       the single-precision node sum of FleetMarginal against the same formula in double
 // The components add up to the total. Rows after them try remedies on the same nodes: the rectangle
-// rule without the guard or with cell masses below it, and the lateral form with each one-piece
+// rule without the floor or with cell masses below it, and the lateral form with each one-piece
 // node's z-moments at the draw's σ_IF (exactly, or first order in u from u_ref as a table could
 // store them from the reference's own derivatives, s² linear in u), or with the table's slopes
 // but s² linear in u (the other form the slopes allow). Uncertainty from the truck subset: a
@@ -131,10 +131,10 @@ double log_cell_density(double x, double h, double mean, double sd) {
   return fleet::log_normal_density(x, mean, sd);  // far tail: the cell's mass underflows
 }
 
-// The same node sum where a fleet sd below FleetMarginal's guard is not guarded: in that direction
+// The same node sum where a fleet sd below FleetMarginal's floor is not floored: in that direction
 // each node's prior weight is the fleet density's mass on the node's cell (exact where the
 // likelihood is flat across a cell, as it is when the fleet sd, not the likelihood, is narrow);
-// above the guard the point density, as now (the cell mass would err by ~ (spacing / width)² / 24).
+// above the floor the point density, as now (the cell mass would err by ~ (spacing / width)² / 24).
 double assemble_cells(const model::Lattice& lattice, const std::vector<NodeTerm>& terms, const Draw& d, int sensors) {
   const fleet::HyperVector& t = d.theta;
   double s = kNegInf;
@@ -166,14 +166,14 @@ enum Component {
   kComponents
 };
 const char* kSourceNames[] = {"total",
-                              "rectangle (+guard)",
+                              "rectangle (+floor)",
                               "dropping",
                               "laplace+window",
                               "lateral",
                               "float",
                               "z-integral (laplace+window+lateral)",
-                              "  rectangle, no guard",
-                              "  rectangle, cell mass below the guard",
+                              "  rectangle, no floor",
+                              "  rectangle, cell mass below the floor",
                               "  lateral, one-piece nodes' z-moments at the draw's u",
                               "  lateral, one-piece nodes' z-moments first order in u",
                               "  lateral, the table's slopes with s² linear in u"};
@@ -539,9 +539,9 @@ int main(int argc, char** argv) {
         least_ratio = std::min(least_ratio, ratio);
         if (ratio < model::FleetMarginal::kMinSdPerSpacing) ++below;
       }
-      const double guard = model::FleetMarginal::kMinSdPerSpacing;
-      std::cout << "draws with a fleet sd below FleetMarginal's guard (" << guard << " spacings: "
-                << fmt_g(guard * lattice.dk_npm) << ", " << fmt_g(guard * lattice.dkt_npm) << " N/m): " << below << " of "
+      const double floor = model::FleetMarginal::kMinSdPerSpacing;
+      std::cout << "draws with a fleet sd below FleetMarginal's floor (" << floor << " spacings: "
+                << fmt_g(floor * lattice.dk_npm) << ", " << fmt_g(floor * lattice.dkt_npm) << " N/m): " << below << " of "
                 << D << "; least fleet sd over spacing among the draws " << fmt_g(least_ratio) << "\n";
     }
     std::vector<std::size_t> all_s(subset.size());

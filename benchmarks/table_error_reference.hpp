@@ -200,7 +200,7 @@ class TruckReference {
   }
 
   // The rectangle rule on `lattice` flooded from `seeds` out to threshold_nats below every
-  // draw's best node: node -> values. `floor_sd` evaluates the fleet sds at FleetMarginal's guard
+  // draw's best node: node -> values. `floor_sd` evaluates the fleet sds at FleetMarginal's floor
   // (as the tables do on their own lattice).
   using NodeMap = std::map<std::pair<int, int>, NodeValues>;
   NodeMap flood(const model::Lattice& lattice, std::vector<std::pair<int, int>> seeds, double threshold_nats,
@@ -243,7 +243,7 @@ class TruckReference {
     return nodes;
   }
 
-  // log N(k_g | K, σ_k²) N(kt_g | K_t, σ_kt²) (sds guarded as FleetMarginal guards them, if asked).
+  // log N(k_g | K, σ_k²) N(kt_g | K_t, σ_kt²) (sds floored as FleetMarginal floors them, if asked).
   static double log_prior(const model::Lattice& lattice, const std::pair<int, int>& ij, const fleet::HyperVector& t,
                           bool floor_sd) {
     double sk = t[fleet::kSigmaK], skt = t[fleet::kSigmaKt];
