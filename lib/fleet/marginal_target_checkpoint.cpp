@@ -16,7 +16,7 @@ constexpr std::uint64_t kMagic = 0x4e52414d46525353ULL;  // "SSRFMARN"
 // an older state is of the only site there was, index 0.
 // Version 4 adds each table entry's z-moment slopes in u (model/truck_table.hpp). A table of an older
 // state has none: it is read with slopes of 0, its moments fixed as it was built and evaluated (the
-// same likelihood as before), until the next rebuild gives every table its slopes.
+// likelihood the build that wrote it evaluated), until the next rebuild gives every table its slopes.
 constexpr std::uint32_t kVersion = 4;
 
 }  // namespace
