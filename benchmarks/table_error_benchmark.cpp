@@ -11,12 +11,15 @@
 //   laplace     the table's Laplace form in σ_IF (its c, m, b per node) with the exact lateral
 //               ratio, against the exact z-integral at the kept nodes (also holds the table's
 //               z-window: the reference integrates the whole road)
-//   lateral     the table's moment matching of N(z | Z, σ_z²) (per node or piece), in double
+//   lateral     the table's moment matching of N(z | Z, σ_z²) (per node or piece, its z-moments
+//               moved to the draw's σ_IF by the entry's slopes as FleetMarginal moves them), in double
 //   float       the single-precision node sum of FleetMarginal against the same formula in double
 // The components add up to the total. Rows after them try remedies on the same nodes: the rectangle
 // rule without the floor or with cell masses below it, and the lateral form with each one-piece
 // node's z-moments at the draw's σ_IF (exactly, or first order in u from u_ref as a table could
-// store them). Uncertainty from the truck subset: a bootstrap over trucks.
+// store them from the reference's own derivatives, s² linear in u), or with the table's slopes
+// but s² linear in u (the other form the slopes allow). Uncertainty from the truck subset: a
+// bootstrap over trucks.
 // Each configuration (a knob of MarginalTarget::Options) is a fit of its own (its cost: integrator
 // passes, entries and table time per truck) evaluated at the default fit's draws and subset.
 //
@@ -159,6 +162,7 @@ enum Component {
   kLatticeCells,
   kMomentsAtU,
   kMomentsFirstOrder,
+  kSlopesLinearVar,
   kComponents
 };
 const char* kSourceNames[] = {"total",
@@ -171,8 +175,9 @@ const char* kSourceNames[] = {"total",
                               "  rectangle, no floor",
                               "  rectangle, cell mass below the floor",
                               "  lateral, one-piece nodes' z-moments at the draw's u",
-                              "  lateral, one-piece nodes' z-moments first order in u"};
-constexpr int kSources = 11;
+                              "  lateral, one-piece nodes' z-moments first order in u",
+                              "  lateral, the table's slopes with s² linear in u"};
+constexpr int kSources = 12;
 // Source s of one truck at one draw, from its six likelihoods.
 double source(const std::array<double, kComponents>& l, int s) {
   switch (s) {
@@ -187,7 +192,8 @@ double source(const std::array<double, kComponents>& l, int s) {
     case 8: return l[kLatticeCells] - l[kExact];
     // The lateral source with the table's lateral form replaced (kDouble -> the variant).
     case 9: return l[kMomentsAtU] - l[kLaplaceOnly];
-    default: return l[kMomentsFirstOrder] - l[kLaplaceOnly];
+    case 10: return l[kMomentsFirstOrder] - l[kLaplaceOnly];
+    default: return l[kSlopesLinearVar] - l[kLaplaceOnly];
   }
 }
 
@@ -408,7 +414,7 @@ int main(int argc, char** argv) {
         out[kExact] = exact[s][d];
         out[kTab] = marginal.log_likelihood(view, marginal.prepare(t));
         const double sz2 = t[fleet::kSigmaZ] * t[fleet::kSigmaZ];
-        std::vector<NodeTerm> dbl, lap, kept_exact, all_exact, at_u, first_order;
+        std::vector<NodeTerm> dbl, lap, kept_exact, all_exact, at_u, first_order, linear_var;
         // The Gaussian lateral form, exactly (no expansion in ε).
         auto gaussian_lateral = [&](double z_mean, double z_var) {
           const double v = sz2 + z_var, dz = z_mean - t[fleet::kZ];
@@ -416,17 +422,26 @@ int main(int argc, char** argv) {
         };
         for (const auto& [ij, entries] : by_node) {
           const auto& v = on_lattice.at(ij);
-          double y_d = kNegInf, y_l = kNegInf;
+          double y_d = kNegInf, y_l = kNegInf, y_v = kNegInf;
+          // The table's lateral form, expanded in ε as FleetMarginal expands it.
+          auto table_lateral = [&](double z_mean, double z_var) {
+            const double eps = z_var / sz2, dz = z_mean - t[fleet::kZ];
+            return -0.5 * (fleet::kLog2Pi + std::log(sz2)) - dr.log_mass - 0.5 * eps -
+                   dz * dz / (2.0 * sz2) * (1.0 - eps + eps * eps);
+          };
           for (std::size_t g : entries) {
             const double laplace = view.c[g] - view.m[g] * 0.5 * dr.u - view.b[g] * dr.log_u;
-            const double eps = view.z_var_m2[g] * view.u_ref / (dr.u * sz2);
-            const double dz = view.z_mean_m[g] - t[fleet::kZ];
-            const double lateral = -0.5 * (fleet::kLog2Pi + std::log(sz2)) - dr.log_mass - 0.5 * eps -
-                                   dz * dz / (2.0 * sz2) * (1.0 - eps + eps * eps);
-            y_d = log_add(y_d, laplace + lateral);
+            const model::FleetMarginal::EntryMoments z = model::FleetMarginal::entry_moments(view, g, dr.u);
+            y_d = log_add(y_d, laplace + table_lateral(z.z_mean_m, z.z_var_m2));
             y_l = log_add(y_l, laplace);
+            // The same slopes with s² linear in u instead of u s²: s² + x (v' - s²), kept >= 0.
+            const double x = model::FleetMarginal::slope_step(view.u_ref, dr.u);
+            const double var_linear =
+                std::max(0.0, view.z_var_m2[g] + x * (static_cast<double>(view.z_var_slope_m2[g]) - view.z_var_m2[g]));
+            y_v = log_add(y_v, laplace + table_lateral(z.z_mean_m, var_linear));
           }
           dbl.push_back({ij, y_d});
+          linear_var.push_back({ij, y_v});
           if (entries.size() == 1) {
             const double du = dr.u - view.u_ref;
             at_u.push_back({ij, y_l + gaussian_lateral(v.z_mean[d], v.z_var[d])});
@@ -448,6 +463,7 @@ int main(int argc, char** argv) {
         out[kLatticeCells] = assemble_cells(lattice, all_exact, dr, M);
         out[kMomentsAtU] = assemble(lattice, at_u, dr, M, true);
         out[kMomentsFirstOrder] = assemble(lattice, first_order, dr, M, true);
+        out[kSlopesLinearVar] = assemble(lattice, linear_var, dr, M, true);
       }
       std::cerr << "  truck " << i << ": " << view.nodes << " entries, " << by_node.size() << " nodes, " << on_lattice.size()
                 << " lattice nodes; tab-exact at the mean " << fmt_g(l[s][DD - 1][kTab] - l[s][DD - 1][kExact]) << "\n";
@@ -459,7 +475,7 @@ int main(int argc, char** argv) {
       dump << "truck,draw";
       for (int h = 0; h < fleet::kHyperCount; ++h) dump << "," << fleet::kHyperNames[h];
       dump << ",tab,dbl,laplace_only,kept_exact,lattice_exact,exact,lattice_unfloored,lattice_cells,moments_at_u,"
-              "moments_first_order\n";
+              "moments_first_order,slopes_linear_var\n";
       dump.precision(17);
       for (std::size_t s = 0; s < subset.size(); ++s)
         for (std::size_t d = 0; d < DD; ++d) {
@@ -516,14 +532,17 @@ int main(int argc, char** argv) {
     }
     {
       int below = 0;
+      double least_ratio = 1e300;
       for (int d = 0; d < D; ++d) {
         const fleet::HyperVector& t = draws[static_cast<std::size_t>(d)].theta;
-        if (t[fleet::kSigmaK] < model::FleetMarginal::kMinSdPerSpacing * lattice.dk_npm ||
-            t[fleet::kSigmaKt] < model::FleetMarginal::kMinSdPerSpacing * lattice.dkt_npm)
-          ++below;
+        const double ratio = std::min(t[fleet::kSigmaK] / lattice.dk_npm, t[fleet::kSigmaKt] / lattice.dkt_npm);
+        least_ratio = std::min(least_ratio, ratio);
+        if (ratio < model::FleetMarginal::kMinSdPerSpacing) ++below;
       }
-      std::cout << "draws with a fleet sd below FleetMarginal's floor (0.8 spacings: " << fmt_g(0.8 * lattice.dk_npm) << ", "
-                << fmt_g(0.8 * lattice.dkt_npm) << " N/m): " << below << " of " << D << "\n";
+      const double floor = model::FleetMarginal::kMinSdPerSpacing;
+      std::cout << "draws with a fleet sd below FleetMarginal's floor (" << floor << " spacings: "
+                << fmt_g(floor * lattice.dk_npm) << ", " << fmt_g(floor * lattice.dkt_npm) << " N/m): " << below << " of "
+                << D << "; least fleet sd over spacing among the draws " << fmt_g(least_ratio) << "\n";
     }
     std::vector<std::size_t> all_s(subset.size());
     std::iota(all_s.begin(), all_s.end(), std::size_t{0});

@@ -156,61 +156,86 @@ TEST_CASE("tables prebuilt one truck per thread give the bits of tables built on
   CHECK(resumed.target().integrator_passes() == replayed->target().integrator_passes());
 }
 
-TEST_CASE("a marginal target of format 1 (before frozen table options), 2 (before sites) or 3 (before models) is "
-          "migrated and resumes exactly",
+TEST_CASE("a marginal target of format 1 (before frozen table options), 2 (before sites), 3 (before models) or 4 "
+          "(before the z-moment slopes) is migrated and resumes as its tables were built",
           "[marginal]") {
   Case c(20, 3);
   fleet::MarginalSmc straight(c.site, options(64, 2, 4));
   for (const auto& r : c.log.records) straight.absorb(r);
 
-  for (const std::uint32_t old_version : {1u, 2u, 3u}) {
+  // After its first truck a core has no frozen options, and one truck record, sealed, at the end.
+  fleet::MarginalSmc first(c.site, options(64, 2, 4));
+  first.absorb(c.log.records[0]);
+  const std::string current = bytes_of(first);
+  const std::uint64_t magic = 0x4e52414d46525353ULL;  // the marginal target's "SSRFMARN"
+  const std::size_t at = current.find(std::string(reinterpret_cast<const char*>(&magic), sizeof magic));
+  REQUIRE(at != std::string::npos);
+  std::uint32_t version = 0;
+  std::memcpy(&version, current.data() + at + 8, sizeof version);
+  REQUIRE(version == 5);
+  // The record ends with the table's two slope fields (a float per entry each), then the seal.
+  const std::size_t entries = first.target().tables().view(0).nodes;
+  REQUIRE(entries > 0);
+  const std::size_t body = current.size() - sizeof(std::uint64_t);
+  const std::size_t slope_bytes = 2 * entries * sizeof(float);
+  const std::size_t slopes_at = body - slope_bytes;
+  // The one truck record's seal covers everything before it: seal edited bytes again.
+  auto reseal = [](std::string& bytes) {
+    const std::size_t end = bytes.size() - sizeof(std::uint64_t);
+    const std::uint64_t seal = detail::fnv1a(detail::kFnvOffset, bytes.data(), end);
+    std::memcpy(bytes.data() + end, &seal, sizeof seal);
+  };
+  // A table of an older format has no slopes: it must resume as this build's state with that
+  // table's slopes at 0 (its moments fixed in σ_IF, as it was built and evaluated), not misread.
+  std::string zeroed = current;
+  std::memset(zeroed.data() + slopes_at, 0, slope_bytes);
+  REQUIRE(zeroed != current);  // the truck's slopes were not all 0 already
+  reseal(zeroed);
+  fleet::MarginalSmc expected(c.site, options(64, 2, 4));
+  restore_from(expected, zeroed);
+  for (std::size_t t = 1; t < c.log.records.size(); ++t) expected.absorb(c.log.records[t]);
+  const std::string want = bytes_of(expected);
+  CHECK(want != bytes_of(straight));  // the slopes change the likelihood: the check below can fail
+
+  for (const std::uint32_t old_version : {1u, 2u, 3u, 4u}) {
     INFO("format " << old_version);
-    // After its first truck a core has no frozen options. Its format-3 bytes are format 4's without
-    // the model (an empty name: its 8-byte length 0) and ψ (a 0 x 64 matrix: two 8-byte sizes)
-    // just before the truck count; format 2's are format 3's with no site index (4 bytes: 0) at the
+    // Format 4's bytes are format 5's without the slopes; format 3's are format 4's without the
+    // model (an empty name: its 8-byte length 0) and ψ (a 0 x 64 matrix: two 8-byte sizes) just
+    // before the truck count; format 2's are format 3's with no site index (4 bytes: 0) at the
     // start of the truck record, right after the truck's id; format 1's are format 2's without the
-    // flag byte (0: none frozen) after the pass count.
-    fleet::MarginalSmc first(c.site, options(64, 2, 4));
-    first.absorb(c.log.records[0]);
-    std::string bytes = bytes_of(first);
-    const std::uint64_t magic = 0x4e52414d46525353ULL;  // the marginal target's "SSRFMARN"
-    const std::size_t at = bytes.find(std::string(reinterpret_cast<const char*>(&magic), sizeof magic));
-    REQUIRE(at != std::string::npos);
-    std::uint32_t version = 0;
-    std::memcpy(&version, bytes.data() + at + 8, sizeof version);
-    REQUIRE(version == 4);
+    // flag byte (0: none frozen) after the pass count. Edited from the end, so the earlier offsets hold.
+    std::string bytes = current;
+    bytes.erase(slopes_at, slope_bytes);
     // magic, version, lattice, σ_ref, two absent populations' flags, last rebuild, rebuilds, passes.
     const std::size_t flag = at + 8 + 4 + sizeof(model::Lattice) + 8 + 1 + 1 + 8 + 4 + 8;
     REQUIRE(bytes[flag] == 0);
-    const std::string& id = c.log.records[0].truck_id;
-    const std::size_t id_at = bytes.find(id, flag);
-    REQUIRE(id_at != std::string::npos);
-    REQUIRE(bytes.substr(id_at + id.size(), 4) == std::string(4, '\0'));
-    // The base model's name and ψ, then the truck count (1): zeros, 0 rows, 64 columns, 1.
-    std::string model_and_count(16, '\0');
-    for (const std::int64_t v : {std::int64_t{64}, std::int64_t{1}})
-      model_and_count.append(reinterpret_cast<const char*>(&v), sizeof v);
-    const std::size_t model_at = bytes.find(model_and_count, flag);
-    REQUIRE(model_at != std::string::npos);
-    REQUIRE(model_at < id_at);
-    if (old_version <= 2) bytes.erase(id_at + id.size(), 4);
-    bytes.erase(model_at, 24);
+    if (old_version <= 2) {
+      const std::string& id = c.log.records[0].truck_id;
+      const std::size_t id_at = bytes.find(id, flag);
+      REQUIRE(id_at != std::string::npos);
+      REQUIRE(bytes.substr(id_at + id.size(), 4) == std::string(4, '\0'));
+      bytes.erase(id_at + id.size(), 4);
+    }
+    if (old_version <= 3) {
+      // The base model's name and ψ, then the truck count (1): zeros, 0 rows, 64 columns, 1.
+      std::string model_and_count(16, '\0');
+      for (const std::int64_t v : {std::int64_t{64}, std::int64_t{1}})
+        model_and_count.append(reinterpret_cast<const char*>(&v), sizeof v);
+      const std::size_t model_at = bytes.find(model_and_count, flag);
+      REQUIRE(model_at != std::string::npos);
+      bytes.erase(model_at, 24);
+    }
     if (old_version == 1) bytes.erase(flag, 1);
     std::memcpy(bytes.data() + at + 8, &old_version, sizeof old_version);
-    // The one truck record's seal covers everything before it: seal the edited bytes again.
-    const std::size_t body = bytes.size() - sizeof(std::uint64_t);
-    const std::uint64_t seal = detail::fnv1a(detail::kFnvOffset, bytes.data(), body);
-    std::memcpy(bytes.data() + body, &seal, sizeof seal);
+    reseal(bytes);
 
     fleet::MarginalSmc resumed(c.site, options(64, 2, 4));
     restore_from(resumed, bytes);
-    // A format before sites: its truck log must be written anew, not appended to (a generation of
-    // its own); format 3's truck records are this build's.
-    CHECK(resumed.target().read_old_truck_records() == (old_version <= 2));
-    CHECK(resumed.table_generation() ==
-          first.table_generation() + (old_version <= 2 ? fleet::MarginalSmc::kMigratedGeneration : 0));
+    CHECK(resumed.target().read_old_truck_records());
+    // Its truck log must be written anew, not appended to: a generation of its own.
+    CHECK(resumed.table_generation() == first.table_generation() + fleet::MarginalSmc::kMigratedGeneration);
     for (std::size_t t = 1; t < c.log.records.size(); ++t) resumed.absorb(c.log.records[t]);
-    CHECK(bytes_of(resumed) == bytes_of(straight));
+    CHECK(bytes_of(resumed) == want);
   }
 }
 
@@ -471,4 +496,28 @@ TEST_CASE("the pooled final sweeps estimate the posterior means with less Monte 
   }
   INFO("sum of (scatter / sd)^2: last cloud " << last_sum << ", pool " << pooled_sum);
   CHECK(last_sum / pooled_sum > 2.0);
+}
+
+TEST_CASE("the lattice keeps FleetMarginal's floor under the fleet sds' posterior", "[marginal]") {
+  // The spacing resolves the fleet sds' 0.1 % posterior quantile, so the floor (a fleet sd below
+  // 0.8 spacings is evaluated there) sits under the cloud: a floor inside it would flatten the
+  // posterior's lower tail and widen it. Between rebuilds the spacing may lag the ideal by up to
+  // too_coarse = 1.25, which still leaves the floor at the quantile.
+  Case c(100, 12);
+  fleet::MarginalSmc smc(c.site, options(256, 2, 5));
+  for (const auto& r : c.log.records) smc.absorb(r);
+  const auto& target = smc.target();
+  const model::Lattice& lattice = target.settings().lattice;
+  const fleet::PosteriorCloud cloud = smc.current_cloud();
+  double below = 0.0, total = 0.0;
+  for (Eigen::Index p = 0; p < cloud.weights.size(); ++p) {
+    total += cloud.weights[p];
+    if (cloud.theta(fleet::kSigmaK, p) < model::FleetMarginal::kMinSdPerSpacing * lattice.dk_npm ||
+        cloud.theta(fleet::kSigmaKt, p) < model::FleetMarginal::kMinSdPerSpacing * lattice.dkt_npm)
+      below += cloud.weights[p];
+  }
+  INFO("lattice (" << lattice.dk_npm << ", " << lattice.dkt_npm << ") N/m; weight below the floor " << below / total);
+  // At most the quantile's 0.1 % and a particle or two of 256 that the weights since the last
+  // rebuild moved there.
+  CHECK(below / total < 0.01);
 }

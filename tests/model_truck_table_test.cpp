@@ -248,3 +248,88 @@ TEST_CASE("the flood fill skips the ring its extrapolation rules out and keeps t
   CHECK(evaluated_ruled < 0.93 * evaluated_every);
   CHECK(passes_ruled < passes_every);
 }
+
+TEST_CASE("an entry's z-moment slopes are the u-derivatives of its lateral moments", "[model]") {
+  // The slopes come from the same quadrature as the moments (covariances with -SSR/2); tables built
+  // at u_ref (1 ± 2 %) on the same lattice hold the moments there, so a central difference of
+  // theirs must match, up to its own error (third derivative × 4e-4) and the floats' rounding.
+  const site::Site site(site::load_road("AS3"), site::SiteOptions{});
+  const auto trucks = fleet::draw_fleet(fleet::FleetDistribution{}, 4, site.lateral_min_m(), site.lateral_max_m(), 17);
+  const auto log = fleet::simulate_log(site, trucks, 0.02, 17);
+  model::TruckTableOptions to;
+  to.sigma_ref = 0.02;
+  to.population = model::TruckTableOptions::Population{500e3, 65e3, 1950e3, 255e3};
+  const model::Lattice lattice{500e3, 25e3, 1950e3, 120e3};
+  constexpr double kStep = 0.02;  // x = u / u_ref - 1 of the two other tables
+  std::size_t compared = 0;
+  double largest_mean_slope = 0.0, largest_var_slope = 0.0, worst_mean = 0.0, worst_var = 0.0;
+  for (const auto& r : log.records) {
+    const model::TruckFit fit = model::fit_truck(site, r.speed_mps, r.sprung_mass_kg, r.impact_factor, to);
+    auto build = [&](double x) {
+      model::TruckTableOptions o = to;
+      o.sigma_ref = to.sigma_ref / std::sqrt(1.0 + x);
+      return model::build_truck_table(site, r.speed_mps, r.sprung_mass_kg, r.impact_factor, lattice, o, fit);
+    };
+    const model::TruckTable at = build(0.0), up = build(kStep), down = build(-kStep);
+    REQUIRE(at.z_mean_slope_m.size() == at.nodes());
+    REQUIRE(at.z_var_slope_m2.size() == at.nodes());
+    // One entry per node here (z is pinned on AS3 at σ_IF = 0.02): match the entries by node.
+    auto find = [](const model::TruckTable& t, std::int32_t i, std::int32_t j) -> std::ptrdiff_t {
+      for (std::size_t g = 0; g < t.nodes(); ++g)
+        if (t.k_index[g] == i && t.kt_index[g] == j) return static_cast<std::ptrdiff_t>(g);
+      return -1;
+    };
+    for (std::size_t g = 0; g < at.nodes(); ++g) {
+      const std::ptrdiff_t a = find(up, at.k_index[g], at.kt_index[g]), b = find(down, at.k_index[g], at.kt_index[g]);
+      if (a < 0 || b < 0) continue;
+      const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+      const double fd_mean = (static_cast<double>(up.z_mean_m[ua]) - down.z_mean_m[ub]) / (2.0 * kStep);
+      const double fd_var = ((1.0 + kStep) * static_cast<double>(up.z_var_m2[ua]) -
+                             (1.0 - kStep) * static_cast<double>(down.z_var_m2[ub])) /
+                            (2.0 * kStep);
+      largest_mean_slope = std::max(largest_mean_slope, std::abs(static_cast<double>(at.z_mean_slope_m[g])));
+      largest_var_slope = std::max(largest_var_slope, std::abs(static_cast<double>(at.z_var_slope_m2[g])));
+      worst_mean = std::max(worst_mean, std::abs(fd_mean - at.z_mean_slope_m[g]));
+      worst_var = std::max(worst_var, std::abs(fd_var - at.z_var_slope_m2[g]));
+      ++compared;
+    }
+  }
+  INFO(compared << " entries; largest slopes " << largest_mean_slope << " m, " << largest_var_slope
+                << " m^2; worst differences " << worst_mean << " m, " << worst_var << " m^2");
+  REQUIRE(compared > 100);
+  CHECK(largest_mean_slope > 1e-4);  // the moments do move with σ_IF here: the check can fail
+  // The central difference errs by ~x² = 4e-4 of the slope's own scale, the floats' rounding of
+  // ẑ (~1.5 m, 1.2e-7 m) by 1.2e-7 / 0.04 = 3e-6 m: bounds a few times those.
+  CHECK(worst_mean < 2e-3 * largest_mean_slope + 1e-5);
+  CHECK(worst_var < 2e-3 * largest_var_slope + 1e-9);
+}
+
+TEST_CASE("a fleet sd is evaluated as it is above FleetMarginal's floor, and at the floor below it", "[model]") {
+  // MarginalTarget's lattice keeps the floor under the fleet sds' posterior; above it the node sum
+  // must be the rectangle rule with the true sd, accurate to the rule's own error.
+  const site::Site site(site::load_road("AS1"), site::SiteOptions{});
+  const auto trucks = fleet::draw_fleet(fleet::FleetDistribution{}, 1, site.lateral_min_m(), site.lateral_max_m(), 11);
+  const auto log = fleet::simulate_log(site, trucks, 0.02, 11);
+  const auto& r = log.records[0];
+  model::TruckTableOptions to;
+  to.sigma_ref = 0.02;
+  const model::TruckFit fit = model::fit_truck(site, r.speed_mps, r.sprung_mass_kg, r.impact_factor, to);
+  // k_t's likelihood is broad against this spacing, so the fleet sd sets the integrand's width there.
+  const double dkt = 60e3;
+  const model::Lattice lattice{fit.stiffness_npm, 0.5 * fit.stiffness_sd_per_sigma * 0.02, fit.tyre_stiffness_npm, dkt};
+  const model::TruckTable table = model::build_truck_table(site, r.speed_mps, r.sprung_mass_kg, r.impact_factor, lattice, to, fit);
+  const model::FleetMarginal marginal(site.sensors(), {site.lateral_min_m(), site.lateral_max_m()}, lattice);
+  auto theta = [&](double sigma_kt) {
+    return fleet::HyperVector{fit.stiffness_npm, 50e3, fit.tyre_stiffness_npm + 0.3 * dkt, sigma_kt, 1.5, 0.5, 0.02};
+  };
+  auto at = [&](double sigma_kt) { return marginal.log_likelihood(table, marginal.prepare(theta(sigma_kt))); };
+  // At 0.9 spacings the integrand is about 0.9 spacings wide: the rectangle rule errs by up to
+  // 2 exp(-2π² 0.9²) = 2e-7 (relative), plus the table's other approximations (2e-3, above).
+  const double floor = model::FleetMarginal::kMinSdPerSpacing * dkt;
+  const double mine = at(0.9 * dkt), reference = brute_force_log_likelihood(site, r, fit, theta(0.9 * dkt));
+  const double width = 1.0 / std::sqrt(1.0 / std::pow(0.9 * dkt, 2) + 1.0 / std::pow(fit.tyre_stiffness_sd_per_sigma * 0.02, 2));
+  INFO("table " << mine << ", brute force " << reference << ", integrand width " << width / dkt << " spacings");
+  CHECK(std::abs(mine - reference) < 2.0 * std::exp(-2.0 * std::pow(std::numbers::pi * width / dkt, 2)) + 2e-3);
+  CHECK(at(0.9 * dkt) != at(floor));
+  CHECK(at(0.5 * floor) == at(floor));
+}

@@ -48,6 +48,8 @@ std::string table_bytes(const model::TruckTable& t) {
   put(t.b);
   put(t.z_mean_m);
   put(t.z_var_m2);
+  put(t.z_mean_slope_m);
+  put(t.z_var_slope_m2);
   return os.str();
 }
 
@@ -67,6 +69,8 @@ void read_table_bytes(const std::string& bytes, model::TruckTable& t) {
   get(t.b);
   get(t.z_mean_m);
   get(t.z_var_m2);
+  get(t.z_mean_slope_m);
+  get(t.z_var_slope_m2);
 }
 
 // The moves' coordinates: the four scale parameters on the log scale, where the early posterior's
@@ -247,7 +251,7 @@ MarginalTarget::TableSettings MarginalTarget::ideal_settings(const Eigen::ArrayX
   const double lik_k = std::exp(sum_log_sd_k_ / static_cast<double>(n)) * s.sigma_ref;
   const double lik_kt = std::exp(sum_log_sd_kt_ / static_cast<double>(n)) * s.sigma_ref;
   // The fleet sd the lattice must resolve: a low quantile of its posterior, not the median, so that
-  // FleetMarginal's floor (0.8 spacings) sits below the posterior's lower tail (Options); never
+  // FleetMarginal's floor (0.8 spacings) sits under the posterior's lower tail (Options); never
   // below a fraction of the median, so a broad early posterior does not make the lattice explode.
   auto resolved_sd = [&](const Eigen::RowVectorXd& sd) {
     const double median = weighted_quantile(sd, W, 0.5);

@@ -56,23 +56,18 @@ class MarginalTarget final : public smc::TemperedModel {
     // measured against a 73 x 73 rule on 8 AS1 and 8 AS2 trucks (z integrated exactly at every
     // node, 10 values of θ around the fleet's), f = 0.7 and f = 1.0 both err by at most 4e-6
     // nats per truck on AS1 and 8e-5 on AS2 (a ridge-shaped likelihood, correlation -0.75), with
-    // 0.49 times the nodes at 1.0; at 1.4 a fleet sd of half the usual errs by up to 1e-3. The
-    // floor of FleetMarginal (a fleet sd below 0.8 spacings is evaluated there) sits at 0.8 f
-    // widths below the fleet sd's 2 % quantile, under its posterior's lower tail. (At 0.9 with
-    // the spacing set from the median fleet sd, the floor reached into σ_kt's posterior on the
-    // paper's 100-truck case: 173.6k ± 42.0k against the exact MCMC's 178-180k ± 33.5k. With the
-    // quantile rule, 8 seeds give 179.8k ± 33.5k at 0.7 and 179.2k ± 33.8k at 1.0.)
+    // 0.49 times the nodes at 1.0; at 1.4 a fleet sd of half the usual errs by up to 1e-3. At
+    // f = 1 the rule's error summed over n trucks, 2 n exp(-2π²), stays under 0.1 nat at the
+    // quantile up to n = 10^7, and FleetMarginal's floor (a fleet sd below 0.8 spacings is
+    // evaluated there) sits at 0.8 of the quantile.
     double lattice_fraction = 1.0;
-    // ... of the integrand width at this quantile of the fleet sds' posterior, but at least this
-    // fraction of their median. FleetMarginal evaluates a fleet sd below 0.8 spacings at that floor,
-    // which flattens the posterior's lower tail. At the median (as before): on road AS2 (second
-    // fleet, 1,000 trucks, σ_kt's posterior 173k ± 40k by the batch MCMC) the floor sat near 90k and
-    // the SMC's σ_kt sd came out 24 % too wide (49.6k, 4 seeds). At the 2 % quantile the floor sits
-    // about 3 posterior sd below the mean. Cost on Table 1 (AS1, 1,000 trucks): 256 entries per
-    // table against 213 at the median, 6,900 integrator passes per truck against 4,600 (rebuilds
-    // included; with too_fine = 0.8 below; 363 entries with 0.6).
-    double lattice_sd_quantile = 0.02;
-    double lattice_sd_min_of_median = 0.5;
+    // ... at this quantile of the fleet sds' posterior, but at least this fraction of their median
+    // (so a broad early posterior does not make the lattice explode). At the 2 % quantile the floor
+    // reached into the posterior's lower tail: on road AS2 (second fleet, 1,000 trucks, σ_kt
+    // 170k ± 44k) one of 50 posterior draws had σ_kt below it and the tables put it 2.4 nats too
+    // high; at the median the SMC's σ_kt sd came out 24 % too wide (49.6k against 40k, 4 seeds).
+    double lattice_sd_quantile = 0.001;
+    double lattice_sd_min_of_median = 0.3;
     // Which nodes a table keeps is judged against the posterior predictive of (k, k_t) with its sd
     // multiplied by this (so the fleet may move a good way before dropped nodes matter).
     double population_widening = 1.3;
@@ -193,9 +188,10 @@ class MarginalTarget final : public smc::TemperedModel {
   // Wall seconds this rank spent building trucks' fits and tables (arrivals, prebuilds, rebuilds)
   // in this process (not kept in checkpoints: for the scaling figures of docs/sites.md).
   double table_seconds() const { return table_seconds_; }
-  // The state was read from a format whose truck records name no site (before version 3): the
-  // records this build appends would not match the log's, so the whole log must be written anew.
-  bool read_old_truck_records() const { return loaded_version_ != 0 && loaded_version_ < 3; }
+  // The state was read from a format whose truck records differ from this build's (before version 5:
+  // no site before 3, no z-moment slopes before 5): the records this build appends would not match
+  // the log's, so the whole log must be written anew.
+  bool read_old_truck_records() const { return loaded_version_ != 0 && loaded_version_ < 5; }
   // Σ_i ℓ_i(θ) + log p(θ) of particle p as cached (for tests: the density the moves target).
   double cached_log_posterior(Eigen::Index p) const { return base_sum_[p] + inc_[p] + log_prior(p); }
   // The same recomputed from the tables (collective: every rank calls it); psi: the extension's

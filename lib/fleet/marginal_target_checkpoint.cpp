@@ -16,7 +16,10 @@ constexpr std::uint64_t kMagic = 0x4e52414d46525353ULL;  // "SSRFMARN"
 // an older state is of the only site there was, index 0.
 // Version 4 adds the model fitted (an extension's name, "" for the base model) and each particle's
 // ψ; an older state is of the base model.
-constexpr std::uint32_t kVersion = 4;
+// Version 5 adds each table entry's z-moment slopes in u (model/truck_table.hpp). A table of an older
+// state has none: it is read with slopes of 0, its moments fixed as it was built and evaluated (the
+// likelihood the build that wrote it evaluated), until the next rebuild gives every table its slopes.
+constexpr std::uint32_t kVersion = 5;
 
 }  // namespace
 
@@ -91,6 +94,8 @@ void MarginalTarget::save_trucks(BinaryWriter& out, std::size_t begin, std::size
     write(v.b);
     write(v.z_mean_m);
     write(v.z_var_m2);
+    write(v.z_mean_slope_m);
+    write(v.z_var_slope_m2);
   }
 }
 
@@ -195,6 +200,10 @@ void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
     read(t.b, "table b");
     read(t.z_mean_m, "table z mean");
     read(t.z_var_m2, "table z var");
+    if (loaded_version_ >= 5) {
+      read(t.z_mean_slope_m, "table z mean slope");
+      read(t.z_var_slope_m2, "table z var slope");
+    }
     if (!(t.u_ref > 0.0) || !std::isfinite(speed) || !std::isfinite(mass)) {
       in.fail("truck", "a truck record holds impossible values");
     }

@@ -1,5 +1,6 @@
 #include "model/fleet_marginal.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -33,7 +34,8 @@ ThetaTerms FleetMarginal::prepare(const fleet::HyperVector& theta) const {
     if (!std::isfinite(log_mass[s])) return t;
   }
   // The rectangle rule needs the population density to be smooth on the node spacing; a fleet sd
-  // below kMinSdPerSpacing spacings is evaluated at that floor (see the header).
+  // below kMinSdPerSpacing spacings is evaluated at that floor, which the lattice keeps under the
+  // posterior (see the header).
   const double sk_q = std::max(sk, kMinSdPerSpacing * lattice_.dk_npm);
   const double skt_q = std::max(skt, kMinSdPerSpacing * lattice_.dkt_npm);
   t.a0 = (lattice_.k_origin_npm - theta[kK]) / sk_q;
@@ -111,6 +113,7 @@ void FleetMarginal::entry_exponents(const TableView& table, const ThetaTerms& t,
   const std::size_t n = table.nodes;
   const float eps_per_var = static_cast<float>(table.u_ref / (t.u * t.lateral_var_m2));
   const float inv_2var = static_cast<float>(0.5 / t.lateral_var_m2);
+  const float x = static_cast<float>(slope_step(table.u_ref, t.u));
   float* __restrict out = exponents;
   const std::int32_t* __restrict k_index = table.k_index;
   const std::int32_t* __restrict kt_index = table.kt_index;
@@ -119,6 +122,11 @@ void FleetMarginal::entry_exponents(const TableView& table, const ThetaTerms& t,
   const float* __restrict bb = table.b;
   const float* __restrict z_mean = table.z_mean_m;
   const float* __restrict z_var = table.z_var_m2;
+  // A table without slopes (built in memory without them) is read as slopes of 0: x times any
+  // finite number is 0, so its own moments serve as the stand-in array.
+  const float* __restrict z_mean_slope = table.z_mean_slope_m != nullptr ? table.z_mean_slope_m : table.z_mean_m;
+  const float* __restrict z_var_slope = table.z_var_slope_m2 != nullptr ? table.z_var_slope_m2 : table.z_var_m2;
+  const float x_used = table.z_mean_slope_m != nullptr && table.z_var_slope_m2 != nullptr ? x : 0.0f;
   const float a0 = static_cast<float>(t.a0), da = static_cast<float>(t.da), b0 = static_cast<float>(t.b0),
               db = static_cast<float>(t.db), half_u = static_cast<float>(t.half_u), log_u = static_cast<float>(t.log_u);
   const float lateral_mean = static_cast<float>(t.lateral_mean_m);
@@ -130,8 +138,9 @@ void FleetMarginal::entry_exponents(const TableView& table, const ThetaTerms& t,
       const std::int64_t at = static_cast<std::int64_t>(k_index[g]) - t.k_index_lo;
       const float kd = at >= 0 && at < size ? density[at] : k_log_density_at(t, k_index[g]);
       const float b = b0 + db * static_cast<float>(kt_index[g]);
-      const float dz = z_mean[g] - lateral_mean;
-      const float eps = z_var[g] * eps_per_var;
+      const float dz = z_mean[g] + x_used * z_mean_slope[g] - lateral_mean;
+      const float var = std::max(z_var[g] + x_used * z_var_slope[g], kMinVarShare * z_var[g]);
+      const float eps = var * eps_per_var;
       out[g] = c[g] - m[g] * half_u - bb[g] * log_u + kd - 0.5f * b * b - 0.5f * eps -
                dz * dz * inv_2var * (1.0f - eps + eps * eps);
     }
@@ -140,19 +149,32 @@ void FleetMarginal::entry_exponents(const TableView& table, const ThetaTerms& t,
   for (std::size_t g = 0; g < n; ++g) {
     const float a = a0 + da * static_cast<float>(k_index[g]);
     const float b = b0 + db * static_cast<float>(kt_index[g]);
-    const float dz = z_mean[g] - lateral_mean;
-    const float eps = z_var[g] * eps_per_var;
+    const float dz = z_mean[g] + x_used * z_mean_slope[g] - lateral_mean;
+    const float var = std::max(z_var[g] + x_used * z_var_slope[g], kMinVarShare * z_var[g]);
+    const float eps = var * eps_per_var;
     out[g] = c[g] - m[g] * half_u - bb[g] * log_u - 0.5f * (a * a + b * b) - 0.5f * eps -
              dz * dz * inv_2var * (1.0f - eps + eps * eps);
   }
 }
 
+FleetMarginal::EntryMoments FleetMarginal::entry_moments(const TableView& table, std::size_t g, double u) {
+  const double z_var = table.z_var_m2[g];
+  EntryMoments e{table.z_mean_m[g], z_var};
+  if (table.z_mean_slope_m != nullptr && table.z_var_slope_m2 != nullptr) {
+    const double x = slope_step(table.u_ref, u);
+    e.z_mean_m += x * table.z_mean_slope_m[g];
+    e.z_var_m2 = std::max(z_var + x * table.z_var_slope_m2[g], static_cast<double>(kMinVarShare) * z_var);
+  }
+  e.z_var_m2 *= table.u_ref / u;
+  return e;
+}
+
 double FleetMarginal::log_likelihood(const TableView& table, const ThetaTerms& t) const {
   if (!t.inside) return kNegInf;
   const std::size_t n = table.nodes;
-  // s²(u) = s²_ref u_ref / u: the z-posterior narrows as σ_IF does (exact for a quadratic bowl).
-  // V_g = σ_z² (1 + ε_g), ε_g = s²_g u_ref / (u σ_z²) below 1e-2 in practice: expand log V_g and
-  // 1 / V_g to second order in ε_g rather than pay a log and a division per node.
+  // ẑ_g(u) and s²_g(u) to first order in u from u_ref (the header). V_g = σ_z² (1 + ε_g),
+  // ε_g = s²_g(u) / σ_z² below 1e-2 in practice: expand log V_g and 1 / V_g to second order in ε_g
+  // rather than pay a log and a division per node.
   //
   // The map runs in single precision (the header, "Precision"): the table is float already, and
   // float doubles the SIMD width of the map and of the exponential, where a fit spends most of

@@ -3,10 +3,17 @@
 // the truck's latents integrated out, so the fleet posterior after n trucks is
 // π_n(θ) ∝ p(θ) Π_i ℓ_i(θ) on the 7 hyperparameters alone. The z integral is done when the
 // truck's table is built (truck_table.hpp); (k, k_t) by the rectangle rule on the shared lattice.
-// With u = 1/σ_IF² and V_i = σ_z² + s²_i(u):
-//   ℓ_i(θ) = (M/2) log(u / 2π) - log P_road(Z, σ_z) + log(Δk Δk_t) - log(2π σ_k σ_kt) - ½ log(2π V_i)
-//            + log Σ_g exp( c_g - m_g u/2 - b_g log u - ½ a_g² - ½ β_g² - (ẑ_g - Z)² / (2 V_i) ),
+// With u = 1/σ_IF² and V_g = σ_z² + s²_g(u):
+//   ℓ_i(θ) = (M/2) log(u / 2π) - log P_road(Z, σ_z) + log(Δk Δk_t) - log(2π σ_k σ_kt) - ½ log 2π
+//            + log Σ_g exp( c_g - m_g u/2 - b_g log u - ½ a_g² - ½ β_g² - ½ log V_g - (ẑ_g(u) - Z)² / (2 V_g) ),
 //   a_g = (k_g - K)/σ_k, β_g = (kt_g - K_t)/σ_kt.
+// The entry's z-moments follow σ_IF to first order (truck_table.hpp), with x = u/u_ref - 1:
+//   ẑ_g(u) = ẑ_g + x ẑ'_g,   s²_g(u) = (u_ref/u) max(s²_g + x v'_g, s²_g / 4).
+// The max keeps s² positive where a large step meets a steep slope (then the correction is held at
+// a quarter of the bowl's value); x is clamped to ±kMaxSlopeStep: a first-order expansion is
+// trusted that far, and MarginalTarget rebuilds the tables long before the posterior's σ_IF moves so
+// far from σ_ref (x ≈ ±0.1 at its tolerance). Far-off θ (the prior's, early in a fit) see moments
+// held at the clamp's edge, not extrapolated out of the node's lateral window.
 // a_g and β_g are linear in the node's lattice index, so the node sum reads only the table.
 // Everything that depends on θ alone (not on the truck) is computed once per θ (ThetaTerms).
 //
@@ -16,12 +23,16 @@
 // sites: a constant per site (SiteConstants, ThetaTerms::site_constant), picked by the table's site.
 // (A θ outside one site's support, P_road = 0, is outside the support of all.)
 //
-// The rectangle rule's error is about exp(-2π² (w / Δ)²) for an integrand of width w on spacing Δ:
-// negligible once w ≥ Δ, but a population sd far below Δ would make the node sum jump as K moves
-// between nodes (a rough likelihood no MCMC can cross) and overstate it by Δ / σ when K sits on a
-// node. So σ_k and σ_kt below kMinSdPerSpacing node spacings are evaluated at that floor (error
-// ~3e-6 there). The lattice follows the posterior (MarginalTarget), so the floor only ever touches
-// particles in the far lower tail of σ_k or σ_kt.
+// The rectangle rule's error is about 2 exp(-2π² (w / Δ)²) for an integrand of width w on spacing
+// Δ: negligible once w ≥ Δ, but a fleet sd far below Δ makes the node sum jump as K moves between
+// nodes and overstate it by up to Δ / σ when K sits on a node. Summed over n trucks that is a spike
+// a sampler falls into: evaluated as they are down to 0.3 spacings, the fleet sds of a 100-truck
+// Table 1 fit on AS1 collapsed (σ_kt 5.4k ± 2.3k against the exact 210k), as the lattice, which
+// follows the posterior, refined after them. So σ_k and σ_kt below kMinSdPerSpacing spacings are
+// evaluated at that floor (the rule's error there, 2 exp(-2π² 0.8²) ≈ 6e-6 a truck), and
+// MarginalTarget keeps the floor under the posterior instead: its spacing resolves the fleet sds'
+// 0.1 % posterior quantile, so the floor sits at 0.8 of that quantile, where a floor at 0.8 of the
+// 2 % quantile put a draw of σ_kt under it 2.4 nats off (road AS2, 1,000 trucks).
 //
 // Precision. The node sum runs in single precision, like the tables it reads: 1.7-2.4x faster
 // than in double (side by side, 1,000 Table 1 trucks on AS1, 64 particles). Measured against the
@@ -30,6 +41,7 @@
 // 2,000 times below the 0.5 nats that one posterior sd changes the log density by.
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
 #include "model/fleet_model.hpp"
@@ -74,6 +86,18 @@ class FleetMarginal {
   static constexpr double kMinSdPerSpacing = 0.8;
   // The most components a stiffness mixture may have (prepare's std::invalid_argument beyond).
   static constexpr std::size_t kMaxStiffnessComponents = 8;
+  // The moments' expansion (the header): x = u/u_ref - 1 clamped to ±kMaxSlopeStep; the variance's
+  // correction never below kMinVarShare of its value at u_ref.
+  static constexpr double kMaxSlopeStep = 0.25;
+  static constexpr float kMinVarShare = 0.25f;
+  static double slope_step(double u_ref, double u) {
+    return u_ref > 0.0 ? std::clamp(u / u_ref - 1.0, -kMaxSlopeStep, kMaxSlopeStep) : 0.0;
+  }
+  // Entry g's z-likelihood moments at u, in double (the latent proposal's; the node sum's in float).
+  struct EntryMoments {
+    double z_mean_m = 0.0, z_var_m2 = 0.0;
+  };
+  static EntryMoments entry_moments(const TableView& table, std::size_t g, double u);
 
   FleetMarginal(int sensors, fleet::LateralRange range, Lattice lattice)
       : FleetMarginal(std::vector<SiteConstants>{{sensors, range}}, lattice) {}

@@ -46,13 +46,12 @@ TableProposal::TableProposal(const TableView& table, const FleetMarginal& margin
     log_pi_.push_back(static_cast<double>(e[g] - top));
     k_npm_.push_back(lattice.k_at(table.k_index[g]));
     kt_npm_.push_back(lattice.kt_at(table.kt_index[g]));
-    // The entry's z-likelihood N(ẑ_g, s²_g) (s² scaled from u_ref to u, as FleetMarginal does)
+    // The entry's z-likelihood N(ẑ_g(u), s²_g(u)) (its moments at u, as FleetMarginal takes them)
     // times the lateral prior N(Z, σ_z²).
-    const double s2 = std::max(0.0, static_cast<double>(table.z_var_m2[g])) * table.u_ref / terms.u;
+    const FleetMarginal::EntryMoments z = FleetMarginal::entry_moments(table, g, terms.u);
+    const double s2 = std::max(0.0, z.z_var_m2);
     const double post_var = s2 > 0.0 ? 1.0 / (1.0 / s2 + 1.0 / prior_var) : 0.0;
-    const double post_mean =
-        s2 > 0.0 ? post_var * (static_cast<double>(table.z_mean_m[g]) / s2 + terms.lateral_mean_m / prior_var)
-                 : static_cast<double>(table.z_mean_m[g]);
+    const double post_mean = s2 > 0.0 ? post_var * (z.z_mean_m / s2 + terms.lateral_mean_m / prior_var) : z.z_mean_m;
     z_mean_m_.push_back(post_mean);
     z_sd_m_.push_back(std::max(kMinLateralSdM, std::sqrt(post_var)));
   }

@@ -1,6 +1,7 @@
 #include "model/table_store.hpp"
 
 #include <cstring>
+#include <stdexcept>
 
 namespace ssrfleet::model {
 namespace {
@@ -15,11 +16,23 @@ std::byte* put(std::byte* out, const std::vector<T>& values) {
   return out + values.size() * sizeof(T);
 }
 
+// The slopes' fields, or zeros for a table without them (one read from a state written before
+// tables had them: evaluated with its moments fixed, as it was built to be).
+std::byte* put_or_zero(std::byte* out, const std::vector<float>& values, std::size_t n) {
+  if (values.size() == n) return put(out, values);
+  if (!values.empty()) throw std::logic_error("TableStore: a table's slope field has the wrong length");
+  if (n > 0) std::memset(out, 0, n * sizeof(float));
+  return out + n * sizeof(float);
+}
+
 }  // namespace
 
 TableView view_of(const TruckTable& t) {
+  // A table without slopes (made by hand, or read from an older state) views them as absent.
+  const bool slopes = t.z_mean_slope_m.size() == t.nodes() && t.z_var_slope_m2.size() == t.nodes();
   return {t.k_index.data(), t.kt_index.data(), t.c.data(), t.m.data(), t.b.data(),
-          t.z_mean_m.data(), t.z_var_m2.data(), t.nodes(), t.u_ref};
+          t.z_mean_m.data(), t.z_var_m2.data(), slopes ? t.z_mean_slope_m.data() : nullptr,
+          slopes ? t.z_var_slope_m2.data() : nullptr, t.nodes(), t.u_ref};
 }
 
 TableStore::TableStore(const std::string& spill_directory) : arena_(spill_directory), index_(spill_directory) {}
@@ -34,7 +47,9 @@ void TableStore::append(const TruckTable& t, std::uint32_t site) {
   out = put(out, t.m);
   out = put(out, t.b);
   out = put(out, t.z_mean_m);
-  put(out, t.z_var_m2);
+  out = put(out, t.z_var_m2);
+  out = put_or_zero(out, t.z_mean_slope_m, n);
+  put_or_zero(out, t.z_var_slope_m2, n);
   const Entry entry{nodes(), t.u_ref, static_cast<std::uint32_t>(n), site};
   const std::size_t arena_before = arena_.size();
   arena_.append(record_.data(), record_.size());
@@ -53,7 +68,8 @@ TableView TableStore::view(std::size_t i) const {
   const std::byte* p = arena_.data() + e.offset * kBytesPerNode;
   const auto ints = [&](std::size_t field) { return reinterpret_cast<const std::int32_t*>(p + field * n * 4); };
   const auto floats = [&](std::size_t field) { return reinterpret_cast<const float*>(p + field * n * 4); };
-  return {ints(0), ints(1), floats(2), floats(3), floats(4), floats(5), floats(6), n, e.u_ref, e.site};
+  return {ints(0),   ints(1),   floats(2), floats(3), floats(4), floats(5),
+          floats(6), floats(7), floats(8), n,         e.u_ref,   e.site};
 }
 
 }  // namespace ssrfleet::model

@@ -1,11 +1,12 @@
 // Every absorbed truck's table (truck_table.hpp) in one append-only arena, truck after truck, so
 // the sum Σ_i ℓ_i(θ) that every θ move evaluates streams through memory once instead of chasing a
-// heap allocation per truck. A truck's record is its nodes' seven fields, each contiguous
-// (k_index, kt_index, c, m, b, z_mean_m, z_var_m2: 28 bytes a node, every field 4-byte aligned).
+// heap allocation per truck. A truck's record is its nodes' nine fields, each contiguous
+// (k_index, kt_index, c, m, b, z_mean_m, z_var_m2, z_mean_slope_m, z_var_slope_m2: 36 bytes a node,
+// every field 4-byte aligned).
 //
 // The arena and the per-truck index live in the process's memory, or, given a directory, in
 // unnamed files there that the kernel pages (util/spill_vector.hpp): a stream's tables grow by
-// about 4.7 kB a truck, and in files they leave the process's private memory flat
+// about 6 kB a truck, and in files they leave the process's private memory flat
 // (docs/streaming.md). Append-only; a rebuild fills a new store.
 #pragma once
 
@@ -28,6 +29,8 @@ struct TableView {
   const float* b = nullptr;
   const float* z_mean_m = nullptr;
   const float* z_var_m2 = nullptr;
+  const float* z_mean_slope_m = nullptr;
+  const float* z_var_slope_m2 = nullptr;
   std::size_t nodes = 0;
   double u_ref = 0.0;
   // Which of the fit's sites logged the truck (FleetMarginal's per-site constants; 0 for one site).
@@ -38,7 +41,7 @@ TableView view_of(const TruckTable& table);
 
 class TableStore {
  public:
-  static constexpr std::size_t kBytesPerNode = 2 * sizeof(std::int32_t) + 5 * sizeof(float);
+  static constexpr std::size_t kBytesPerNode = 2 * sizeof(std::int32_t) + 7 * sizeof(float);
 
   // In memory.
   TableStore() = default;

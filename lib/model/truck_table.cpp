@@ -28,11 +28,11 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// What one node contributes: the Laplace-form coefficients and its z-posterior moments at u_ref.
+// What one node contributes: the Laplace-form coefficients, its z-moments at u_ref and their slopes.
 struct NodeResult {
   double log_i_ref = -kInf;
   double c = 0.0, m = 0.0, b = 0.0;
-  double z_mean = 0.0, z_var = 0.0;
+  double z_mean = 0.0, z_var = 0.0, z_mean_slope = 0.0, z_var_slope = 0.0;
   // With a lateral reference: log of ∫ L(z) N(z | Z, σ_z²) dz / ∫ L(z) dz, exactly (the points).
   double lateral_exact = 0.0;
 };
@@ -103,6 +103,16 @@ std::vector<NodeResult> integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& 
     r.c = r.log_i_ref + 0.5 * r.m * u_ref + r.b * std::log(u_ref);
     r.z_mean = z1 / sum;
     r.z_var = std::max(0.0, z2 / sum - r.z_mean * r.z_mean);
+    // u-derivatives (weights ∝ exp(-u SSR / 2)): dẑ/du = -Cov(z, SSR)/2, ds²/du = -Cov((z - ẑ)², SSR)/2,
+    // by centred sums (the covariances are small differences of large moments).
+    double cz = 0.0, cv = 0.0;
+    for (std::size_t i = begin; i < end; ++i) {
+      const double dz = zs[i] - r.z_mean, dsc = ss[i] - smin - mean_ds;
+      cz += ws[i] * dz * dsc;
+      cv += ws[i] * (dz * dz - r.z_var) * dsc;
+    }
+    r.z_mean_slope = -0.5 * u_ref * cz / sum;
+    r.z_var_slope = r.z_var - 0.5 * u_ref * cv / sum;
     if (lateral) {
       double with_prior = 0.0;
       for (std::size_t i = begin; i < end; ++i)
@@ -144,7 +154,8 @@ std::vector<NodeResult> integrate_node(const Eigen::Ref<const Eigen::ArrayXXd>& 
 
 std::size_t TruckTable::bytes() const {
   return sizeof(TruckTable) + k_index.capacity() * sizeof(std::int32_t) * 2 +
-         (c.capacity() + m.capacity() + b.capacity() + z_mean_m.capacity() + z_var_m2.capacity()) * sizeof(float);
+         (c.capacity() + m.capacity() + b.capacity() + z_mean_m.capacity() + z_var_m2.capacity() +
+          z_mean_slope_m.capacity() + z_var_slope_m2.capacity()) * sizeof(float);
 }
 
 TruckTable build_truck_table(const site::Site& site, double speed_mps, double sprung_mass_kg,
@@ -409,6 +420,8 @@ TruckTable build_truck_table(const site::Site& site, double speed_mps, double sp
     table.b.push_back(static_cast<float>(r.b));
     table.z_mean_m.push_back(static_cast<float>(r.z_mean));
     table.z_var_m2.push_back(static_cast<float>(r.z_var));
+    table.z_mean_slope_m.push_back(static_cast<float>(r.z_mean_slope));
+    table.z_var_slope_m2.push_back(static_cast<float>(r.z_var_slope));
     const double w = std::exp(r.log_i_ref - best_log_i);
     wsum += w;
     var_sum += w * r.z_var;

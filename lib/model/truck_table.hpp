@@ -14,15 +14,19 @@
 // whose three numbers match log I_g, its first and its second u-derivative at u_ref (the
 // derivatives are the mean and variance of SSR under the z-posterior). For a quadratic bowl in z
 // it is exact at every u (m = SSR_min, b = ½); elsewhere it is exact to second order at u_ref.
-// The lateral prior N(z | Z, σ_z²) enters through the node's z-posterior mean ẑ_g and the
-// truck's z-posterior variance s²(u) = s²_ref u_ref / u (moment matching:
-// ∫ f(z) N(z | Z, σ_z²) dz = I · N(ẑ | Z, σ_z² + s²) for a Gaussian f).
+// The lateral prior N(z | Z, σ_z²) enters through the node's z-posterior mean ẑ_g(u) and variance
+// s²_g(u) (moment matching: ∫ f(z) N(z | Z, σ_z²) dz = I · N(ẑ | Z, σ_z² + s²) for a Gaussian f).
+// Both move with σ_IF where SSR_g(z) is not a quadratic bowl, so a node stores them at u_ref with
+// their slopes, from the same quadrature (the u-derivative of a z-posterior moment is its
+// covariance with -SSR/2), and FleetMarginal evaluates, with x = u / u_ref - 1,
+//   ẑ_g(u) = ẑ_g + x ẑ'_g,   s²_g(u) = (u_ref / u) (s²_g + x v'_g),
+// ẑ'_g = u_ref dẑ/du and v'_g = d(u s²) / du at u_ref: the bowl's s² ∝ 1/u exactly, v'_g = 0 there.
 //
 // Pieces. Where the sensors leave a truck's z broad and many-peaked across the lane (road AS2: a
 // node's z-posterior sd up to 0.66 m against σ_z = 0.35 m), one Gaussian per node is not enough:
 // the matched form was off by 0.1-0.2 nats per truck and biased σ_z by 20 posterior sd. Such a
 // node's z-range is cut into pieces, each with its own (c, m, b, ẑ, s²), and the node sum adds
-// them: ∫ f N = Σ_p ∫_p f N, each piece matched on its own. A node narrower than the limit (road
+// them: ∫ f N = Σ_p ∫_p f N, each piece matched on its own (moments and slopes per piece). A node narrower than the limit (road
 // AS1: all of them) stays one entry, so its bits and cost do not change.
 // Which nodes. Those whose log I_g(u_ref) is within `keep_nats` of the best node's: the rest
 // carry less than ~e^-keep_nats of the truck's likelihood and are dropped.
@@ -149,6 +153,10 @@ struct TruckTable {
   std::vector<float> c, m, b;       // log I_g(u) ≈ c - m u / 2 - b log u
   std::vector<float> z_mean_m;      // ẑ_g: the node's z-posterior mean at u_ref
   std::vector<float> z_var_m2;      // s²_g: the node's z-posterior variance at u_ref
+  // Their slopes in u (the header): u_ref dẑ/du, and d(u s²)/du, both at u_ref. Zero for a quadratic
+  // bowl, where ẑ is fixed and s² ∝ 1/u.
+  std::vector<float> z_mean_slope_m;
+  std::vector<float> z_var_slope_m2;
   double z_var_ref_m2 = 0.0;        // the truck's mean z-posterior variance at u_ref (a summary)
   double u_ref = 0.0;
   int sensors = 0;
