@@ -158,7 +158,12 @@ TEST_CASE("fit --model fits the effects, records the model and its parameters, a
   const auto chain = io::read_posterior_file(dir.file("m.json"));
   CHECK(chain.model == "speed_bias");
   CHECK(chain.psi.rows() == 1);
-  CHECK(chain.psi.cols() == 200);
+  CHECK(chain.psi.cols() == 4 * 200);  // four chains (the default) of 200 kept draws each
+  CHECK(chain.chains == 4);
+  const auto factor = std::find_if(chain.convergence.begin(), chain.convergence.end(),
+                                   [](const fleet::ParameterConvergence& p) { return p.name == "factor"; });
+  REQUIRE(factor != chain.convergence.end());
+  CHECK(factor->ess_bulk > 0.0);
 }
 
 TEST_CASE("fit --model refuses a bad spec or the marginal core, listing the catalogue", "[cli][extension]") {

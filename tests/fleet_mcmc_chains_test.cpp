@@ -1,6 +1,7 @@
 // Several batch MCMC chains (fleet/batch_mcmc_chains.hpp): chain 0 is the single-chain run, the
 // others start over-dispersed, the draws do not depend on the thread count, and the posterior file
 // keeps the chains' diagnostics.
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -50,19 +51,22 @@ TEST_CASE("MCMC chains that sample one posterior agree by R-hat, and the posteri
           "[fleet][mcmc][chains]") {
   const test::SimulatedCase c(10, 4);
   auto o = small_run(4, 2);
-  o.chain.iterations = 4000;
-  o.chain.burn_in = 1000;
+  o.chain.iterations = 20000;
+  o.chain.burn_in = 2500;
   const auto chains = fleet::run_batch_mcmc_chains(c.site, c.log.records, o);
   const auto cloud = fleet::to_posterior_cloud(chains, c.site, c.log.records, nullptr);
   CHECK(cloud.chains == 4);
-  CHECK(cloud.theta.cols() == 4 * 3000);
+  CHECK(cloud.theta.cols() == 4 * 17500);
   REQUIRE(cloud.convergence.size() == static_cast<std::size_t>(fleet::kHyperCount));
   for (const auto& p : cloud.convergence) {
     INFO(p.name << ": R-hat " << p.rhat << ", bulk-ESS " << p.ess_bulk);
-    // Four chains of 3,000 draws from one posterior: R-hat - 1 is of the order of 1/ESS per chain
-    // (about 0.01 at the ESS of a few hundred these chains reach); 1.05 leaves room for the slowest.
+    // Chains that sample one posterior: split-R̂² is (n-1)/n + B/(nW), and B/W fluctuates with the
+    // split chains' ESS e like χ²(7)/7 / e, so R̂ - 1 is about 1/(2e) with e = ESS_bulk / 8 (eight
+    // split chains): under 0.02 for the bulk-ESS above 200 required here, and 1.05 is well over two
+    // and a half times that. (At 3,000 draws a chain, K's bulk-ESS was 62 and its R̂ 1.063: the
+    // same bound, not a mixing failure; hence the longer chains.)
+    CHECK(p.ess_bulk > 200.0);
     CHECK(p.rhat < 1.05);
-    CHECK(p.ess_bulk > 50.0);
     CHECK(p.mcse_mean > 0.0);
   }
   // Written and read back.
@@ -72,7 +76,13 @@ TEST_CASE("MCMC chains that sample one posterior agree by R-hat, and the posteri
   const auto back = io::read_posterior(text, "chains.json");
   CHECK(back.chains == 4);
   REQUIRE(back.convergence.size() == cloud.convergence.size());
-  CHECK(back.convergence[6].name == "sigma_if");
-  CHECK(back.convergence[6].rhat == cloud.convergence[6].rhat);
-  CHECK(back.convergence[6].mcse_q95 == cloud.convergence[6].mcse_q95);
+  // "convergence" is an object keyed by parameter name (JSON keeps no order): compare by name.
+  for (const auto& p : cloud.convergence) {
+    const auto it = std::find_if(back.convergence.begin(), back.convergence.end(),
+                                 [&](const fleet::ParameterConvergence& b) { return b.name == p.name; });
+    REQUIRE(it != back.convergence.end());
+    CHECK(it->rhat == p.rhat);
+    CHECK(it->ess_tail == p.ess_tail);
+    CHECK(it->mcse_q95 == p.mcse_q95);
+  }
 }
