@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -17,6 +18,7 @@
 #include "io/csv_reader.hpp"
 #include "io/history_db.hpp"
 #include "io/posterior_json.hpp"
+#include "model/truck_table.hpp"
 #include "gained_log.hpp"
 #include "test_support.hpp"
 #include "util/binary_io.hpp"
@@ -277,24 +279,60 @@ TEST_CASE("a stream state of one site written before states named their sites (f
   CHECK(test::read_text(c.state + "/posterior.json") == c.straight_posterior());
 }
 
-TEST_CASE("a stream state written before sites (stream format 4, truck records without a site) resumes exactly, "
-          "its truck log written anew",
+TEST_CASE("a stream state written before sites (stream format 4, truck records without a site) resumes as its "
+          "tables were built, its truck log written anew",
           "[cli][stream][sites]") {
   const OlderState c;
+  // What the resumed state must give: an old table has no z-moment slopes and is read with slopes
+  // of 0 (evaluated as the build that wrote it evaluated it), so the reference is this build's state
+  // of the same 4 trucks with every table's slopes set to 0, resumed on the whole log.
+  const std::string zeroed = c.dir.file("zeroed");
+  std::filesystem::copy(c.state, zeroed, std::filesystem::copy_options::recursive);
+  {
+    std::string log = test::read_text(zeroed + "/trucks.bin");
+    std::size_t at = sealed_record_end(log, 0) + 8;
+    while (at < log.size()) {
+      std::uint64_t id_length = 0;
+      std::memcpy(&id_length, log.data() + at, 8);
+      const std::size_t nodes_at = at + 8 + id_length + 4 + 8 + 8 + (16 + 16 * 8) + sizeof(model::TruckFit);
+      std::uint32_t nodes = 0;
+      std::memcpy(&nodes, log.data() + nodes_at, 4);
+      const std::size_t end = sealed_record_end(log, at);
+      const std::size_t slopes = 2 * sizeof(float) * nodes;
+      REQUIRE(log.substr(end - slopes, slopes) != std::string(slopes, '\0'));
+      std::memset(log.data() + end - slopes, 0, slopes);
+      seal_again(log, at, end);
+      at = end + 8;
+    }
+    test::write_text(zeroed + "/trucks.bin", log);
+  }
+  REQUIRE(c.stream(zeroed, c.log).status == 0);
+  const std::string expected = test::read_text(zeroed + "/posterior.json");
+  CHECK(expected != c.straight_posterior());  // the slopes matter: the checks below can fail
   // The truck log: a sealed header (magic, generation), then per truck a sealed record that starts
-  // with its id (a length and the bytes) and, from marginal target format 3 on, the site's index.
+  // with its id (a length and the bytes) and, from marginal target format 3 on, the site's index;
+  // from format 5 on the table ends with two slope arrays (a float per entry each). After the site:
+  // speed, mass, the 16 impact factors (two 8-byte sizes and the values), the fit, the entry count.
   std::string log = test::read_text(c.state + "/trucks.bin");
   std::size_t at = sealed_record_end(log, 0) + 8;
   int records = 0;
+  std::size_t slope_bytes_removed = 0;
   while (at < log.size()) {
     std::uint64_t id_length = 0;
     std::memcpy(&id_length, log.data() + at, 8);
     const std::size_t site_at = at + 8 + id_length;
     REQUIRE(log.substr(site_at, 4) == std::string(4, '\0'));
+    const std::size_t nodes_at = site_at + 4 + 8 + 8 + (16 + 16 * 8) + sizeof(model::TruckFit);
+    std::uint32_t nodes = 0;
+    std::memcpy(&nodes, log.data() + nodes_at, 4);
+    REQUIRE(nodes > 0);
     const std::size_t end = sealed_record_end(log, at);
+    const std::size_t slopes = 2 * sizeof(float) * nodes;
+    log.erase(end - slopes, slopes);
     log.erase(site_at, 4);
-    seal_again(log, at, end - 4);
-    at = end - 4 + 8;
+    seal_again(log, at, end - slopes - 4);
+    at = end - slopes - 4 + 8;
+    slope_bytes_removed += slopes;
     ++records;
   }
   REQUIRE(records == 4);
@@ -308,7 +346,7 @@ TEST_CASE("a stream state written before sites (stream format 4, truck records w
   const std::size_t log_bytes_at = pos + 8 + 8 + 8 + 1 + 8 + 8 + 8 + 8;
   std::uint64_t log_bytes = 0;
   std::memcpy(&log_bytes, bytes.data() + log_bytes_at, 8);
-  REQUIRE(log_bytes == log.size() + 4 * 4);
+  REQUIRE(log_bytes == log.size() + 4 * 4 + slope_bytes_removed);
   log_bytes = log.size();
   std::memcpy(bytes.data() + log_bytes_at, &log_bytes, 8);
   const std::uint32_t v2 = 2;
@@ -316,13 +354,20 @@ TEST_CASE("a stream state written before sites (stream format 4, truck records w
   const std::size_t target = bytes.find(std::string(reinterpret_cast<const char*>(&target_magic), 8));
   REQUIRE(target != std::string::npos);
   std::memcpy(bytes.data() + target + 8, &v2, 4);
+  // Marginal target format 4 added the model (an empty name: its 8-byte length 0) and ψ (a 0 x 64
+  // matrix: two 8-byte sizes) just before the truck count (4).
+  std::string model_and_count(16, '\0');
+  for (const std::int64_t v : {std::int64_t{64}, std::int64_t{4}})
+    model_and_count.append(reinterpret_cast<const char*>(&v), sizeof v);
+  const std::size_t model_at = bytes.find(model_and_count, target);
+  REQUIRE(model_at != std::string::npos);
+  bytes.erase(model_at, 24);
   c.write_checkpoint(bytes);
 
   const auto resumed = c.stream(c.state, c.log);
   INFO(resumed.err);
   REQUIRE(resumed.status == 0);
   CHECK(resumed.err.find("4 trucks absorbed") != std::string::npos);
-  const std::string expected = c.straight_posterior();
   CHECK(test::read_text(c.state + "/posterior.json") == expected);
   // The log was written anew in this build's records, under a generation of its own.
   const std::string rewritten = test::read_text(c.state + "/trucks.bin");
