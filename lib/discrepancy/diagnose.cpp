@@ -43,8 +43,9 @@ long long integrator_passes(const fleet::OnlineFit& fit) {
   return fit.marginal()->target().integrator_passes();
 }
 
-// The fit of one model. An extension's refit takes its new trucks' latents from `proposals` (the
-// base fit's tables) when given, and runs no final sweeps: finish() runs them on the one chosen.
+// The fit of one model. An extension's refit on the latent core takes its new trucks' latents from
+// `proposals` (the base fit's tables) when given; a refit on the marginal core needs none (its
+// tables integrate them out). No refit runs final sweeps: finish() runs them on the one chosen.
 Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& records, std::size_t heldout_from,
                  std::unique_ptr<fleet::ModelExtension> extension, const fleet::NewTruckProposals* proposals,
                  const DiagnoseOptions& o) {
