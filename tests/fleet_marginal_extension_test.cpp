@@ -10,6 +10,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "marginal_checkpoint_bytes.hpp"
+
 #include "fleet/batch_mcmc.hpp"
 #include "fleet/marginal_smc.hpp"
 #include "fleet/online_fit.hpp"
@@ -48,18 +50,8 @@ fleet::MarginalSmc::Options options(Eigen::Index particles, std::uint64_t seed, 
   return o;
 }
 
-std::string bytes_of(const fleet::MarginalSmc& smc) {
-  std::ostringstream os;
-  BinaryWriter w(os);
-  smc.save(w);
-  return os.str();
-}
-
-void restore_from(fleet::MarginalSmc& smc, const std::string& bytes) {
-  std::istringstream is(bytes);
-  BinaryReader in(is, "checkpoint.bin");
-  smc.restore(in);
-}
+using test::bytes_of;
+using test::restore_from;
 
 double log_sum(double log_a, double a_weight, double log_b, double b_weight) {
   const double top = std::max(log_a, log_b);

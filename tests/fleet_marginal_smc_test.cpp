@@ -7,6 +7,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "marginal_checkpoint_bytes.hpp"
+
 #include "test_support.hpp"
 
 #include "fleet/batch_mcmc.hpp"
@@ -36,19 +38,8 @@ fleet::MarginalSmc::Options options(Eigen::Index particles, int threads, std::ui
   return o;
 }
 
-std::string bytes_of(const fleet::MarginalSmc& smc) {
-  std::ostringstream os;
-  BinaryWriter w(os);
-  smc.save(w);
-  return os.str();
-}
-
-// Restores a core from a checkpoint's bytes (bytes_of's), as a resume reads checkpoint.bin.
-void restore_from(fleet::MarginalSmc& smc, const std::string& bytes) {
-  std::istringstream is(bytes);
-  BinaryReader in(is, "checkpoint.bin");
-  smc.restore(in);
-}
+using test::bytes_of;
+using test::restore_from;
 
 }  // namespace
 

@@ -4,6 +4,17 @@
 
 namespace ssrfleet::fleet {
 
+vehicle::QuarterCar quarter_car_of(const PassSetup& s) {
+  vehicle::QuarterCar car;
+  car.sprung_mass_kg = s.sprung_mass_kg;
+  car.unsprung_mass_kg = s.unsprung_mass_kg;
+  car.suspension_stiffness_npm = s.stiffness_npm;
+  car.suspension_damping_nspm = s.suspension_damping_nspm;
+  car.tyre_stiffness_npm = s.tyre_stiffness_npm;
+  car.tyre_damping_nspm = s.tyre_damping_nspm;
+  return car;
+}
+
 PassSetup base_pass(const site::Site& site, double speed_mps, double sprung_mass_kg, double stiffness_npm,
                     double tyre_stiffness_npm, double lateral_m) {
   const auto& o = site.options();
@@ -26,12 +37,7 @@ void simulate_passes(const site::Site& site, const ModelExtension* extension, co
   if (n == 0) return;
   if (extension != nullptr && !extension->edits_forward()) extension = nullptr;  // e.g. second_class
   vehicle::QuarterCarBatch cars;
-  cars.sprung_mass_kg.resize(n);
-  cars.unsprung_mass_kg.resize(n);
-  cars.suspension_stiffness_npm.resize(n);
-  cars.suspension_damping_nspm.resize(n);
-  cars.tyre_stiffness_npm.resize(n);
-  cars.tyre_damping_nspm.resize(n);
+  cars.assign(n, vehicle::QuarterCar{});
   Eigen::ArrayXd speed(n);
   std::vector<vehicle::WheelPath> paths;
   paths.reserve(passes.size());
@@ -39,12 +45,7 @@ void simulate_passes(const site::Site& site, const ModelExtension* extension, co
     const auto& pass = passes[static_cast<std::size_t>(i)];
     PassSetup s = pass.setup;
     if (extension != nullptr) extension->edit_pass(pass.psi, s);
-    cars.sprung_mass_kg[i] = s.sprung_mass_kg;
-    cars.unsprung_mass_kg[i] = s.unsprung_mass_kg;
-    cars.suspension_stiffness_npm[i] = s.stiffness_npm;
-    cars.suspension_damping_nspm[i] = s.suspension_damping_nspm;
-    cars.tyre_stiffness_npm[i] = s.tyre_stiffness_npm;
-    cars.tyre_damping_nspm[i] = s.tyre_damping_nspm;
+    cars.set_car(i, quarter_car_of(s));
     speed[i] = s.speed_mps;
     paths.push_back(site.wheel_path(s.lateral_m));
   }

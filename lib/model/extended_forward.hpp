@@ -9,6 +9,7 @@
 
 #include "model/model_extension.hpp"
 #include "site/site.hpp"
+#include "vehicle/quarter_car.hpp"
 
 namespace ssrfleet::fleet {
 
@@ -21,6 +22,9 @@ struct ExtendedPass {
 // and the site's vehicle constants.
 PassSetup base_pass(const site::Site& site, double speed_mps, double sprung_mass_kg, double stiffness_npm,
                     double tyre_stiffness_npm, double lateral_m);
+
+// The quarter car a pass drives (its vehicle constants; speed and lateral position are the pass's own).
+vehicle::QuarterCar quarter_car_of(const PassSetup& pass);
 
 // Model impact factors at the site's sensors, sensors x passes, through the batched integrator.
 // Passes that share a psi pointer share one added profile, so callers should point passes of

@@ -130,30 +130,33 @@ void FleetMarginal::entry_exponents(const TableView& table, const ThetaTerms& t,
   const float a0 = static_cast<float>(t.a0), da = static_cast<float>(t.da), b0 = static_cast<float>(t.b0),
               db = static_cast<float>(t.db), half_u = static_cast<float>(t.half_u), log_u = static_cast<float>(t.log_u);
   const float lateral_mean = static_cast<float>(t.lateral_mean_m);
-  if (t.has_k_mixture()) {
-    // The node's k weight from the mixture's table (computed on the spot outside its range).
-    const float* density = t.k_log_density.data();
-    const auto size = static_cast<std::int64_t>(t.k_log_density.size());
+  // One loop for both fleets: `fleet_term(g, b)` is -log of the node's (k, k_t) weight up to the
+  // constant, ½(a² + β²) for the base model; a generic lambda, so the base loop stays the
+  // element-wise map the compiler vectorises.
+  auto fill = [&](auto fleet_term) {
     for (std::size_t g = 0; g < n; ++g) {
-      const std::int64_t at = static_cast<std::int64_t>(k_index[g]) - t.k_index_lo;
-      const float kd = at >= 0 && at < size ? density[at] : k_log_density_at(t, k_index[g]);
       const float b = b0 + db * static_cast<float>(kt_index[g]);
       const float dz = z_mean[g] + x_used * z_mean_slope[g] - lateral_mean;
       const float var = std::max(z_var[g] + x_used * z_var_slope[g], kMinVarShare * z_var[g]);
       const float eps = var * eps_per_var;
-      out[g] = c[g] - m[g] * half_u - bb[g] * log_u + kd - 0.5f * b * b - 0.5f * eps -
+      out[g] = c[g] - m[g] * half_u - bb[g] * log_u - fleet_term(g, b) - 0.5f * eps -
                dz * dz * inv_2var * (1.0f - eps + eps * eps);
     }
-    return;
-  }
-  for (std::size_t g = 0; g < n; ++g) {
-    const float a = a0 + da * static_cast<float>(k_index[g]);
-    const float b = b0 + db * static_cast<float>(kt_index[g]);
-    const float dz = z_mean[g] + x_used * z_mean_slope[g] - lateral_mean;
-    const float var = std::max(z_var[g] + x_used * z_var_slope[g], kMinVarShare * z_var[g]);
-    const float eps = var * eps_per_var;
-    out[g] = c[g] - m[g] * half_u - bb[g] * log_u - 0.5f * (a * a + b * b) - 0.5f * eps -
-             dz * dz * inv_2var * (1.0f - eps + eps * eps);
+  };
+  if (t.has_k_mixture()) {
+    // The node's k weight from the mixture's table (computed on the spot outside its range).
+    const float* density = t.k_log_density.data();
+    const auto size = static_cast<std::int64_t>(t.k_log_density.size());
+    fill([&](std::size_t g, float b) {
+      const std::int64_t at = static_cast<std::int64_t>(k_index[g]) - t.k_index_lo;
+      const float kd = at >= 0 && at < size ? density[at] : k_log_density_at(t, k_index[g]);
+      return 0.5f * b * b - kd;
+    });
+  } else {
+    fill([&](std::size_t g, float b) {
+      const float a = a0 + da * static_cast<float>(k_index[g]);
+      return 0.5f * (a * a + b * b);
+    });
   }
 }
 

@@ -54,12 +54,7 @@ inline void simulate_on_lines_edited(const site::Site& site, double speed_mps, d
   const fleet::ModelExtension& ext = *edit.extension;
   const Eigen::Index n = end - begin, per_node = lines.lines();
   vehicle::QuarterCarBatch cars;
-  cars.sprung_mass_kg.resize(n);
-  cars.unsprung_mass_kg.resize(n);
-  cars.suspension_stiffness_npm.resize(n);
-  cars.suspension_damping_nspm.resize(n);
-  cars.tyre_stiffness_npm.resize(n);
-  cars.tyre_damping_nspm.resize(n);
+  cars.assign(n, vehicle::QuarterCar{});
   double speed = 0.0;
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto u = static_cast<std::size_t>(begin + i);
@@ -70,12 +65,7 @@ inline void simulate_on_lines_edited(const site::Site& site, double speed_mps, d
       throw UsageError("truck table: extension " + ext.name() +
                        " moves the lateral position or the speed per node, which line-bundled passes cannot run");
     speed = s.speed_mps;
-    cars.sprung_mass_kg[i] = s.sprung_mass_kg;
-    cars.unsprung_mass_kg[i] = s.unsprung_mass_kg;
-    cars.suspension_stiffness_npm[i] = s.stiffness_npm;
-    cars.suspension_damping_nspm[i] = s.suspension_damping_nspm;
-    cars.tyre_stiffness_npm[i] = s.tyre_stiffness_npm;
-    cars.tyre_damping_nspm[i] = s.tyre_damping_nspm;
+    cars.set_car(i, fleet::quarter_car_of(s));
   }
   const vehicle::PassIntegrator& integrator = site.integrator();
   integrator.run_on_lines(cars, speed, lines, out);
