@@ -197,3 +197,17 @@ TEST_CASE("fit --model second_class runs on the marginal core and writes its psi
   CHECK(json.find("\"model\": \"second_class\"") != std::string::npos);
   CHECK(json.find("\"sigma_k2\"") != std::string::npos);
 }
+
+TEST_CASE("fit --chains out of range is a usage error naming the option, and writes nothing", "[cli][mcmc]") {
+  test::TempDir dir;
+  const std::string log = dir.file("log.csv");
+  REQUIRE(run_ssrfleet("simulate --trucks 4 --seed 3 --quiet --out " + q(log), dir).status == 0);
+  const auto out = dir.file("p.json");
+  for (const char* chains : {"0", "65"}) {
+    const auto r = run_ssrfleet("fit " + q(log) + " --method mcmc --chains " + chains + " --iterations 50 --burn-in 10 --out " + q(out), dir);
+    INFO(r.err);
+    CHECK(r.status == 64);
+    CHECK(r.err.find("chains") != std::string::npos);
+    CHECK(!std::filesystem::exists(out));
+  }
+}

@@ -1,10 +1,13 @@
 // The posterior file's checksum (issue 20 item 4): a file cut short or with a byte changed is a
 // DataError naming the file, never a wrong posterior; re-indenting it, or a file without a
 // checksum, still reads.
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -299,4 +302,55 @@ TEST_CASE("a posterior keeps its sites' sensor calibration, known or fitted, and
   refused([](nlohmann::json& j) { j["calibration"][0]["se"] = {0.1}; }, "calibration[0].se");
   refused([](nlohmann::json& j) { j["calibration"][0].erase("site"); }, "calibration[0].site");
   refused([](nlohmann::json& j) { j["calibration"][0] = 3; }, "calibration[0]");
+}
+
+TEST_CASE("a posterior file's chain diagnostics read back, a file without them is one chain's, and a malformed one is "
+          "refused by field",
+          "[io][posterior]") {
+  test::TempDir dir;
+  auto cloud = random_cloud(8, 5, false);
+  cloud.method = "mcmc";
+  cloud.chains = 4;
+  cloud.convergence = {{"K", 1.0123, 412.5, 301.25, 1021.5, 2048.25, 3001.125},
+                       {"sigma_if", std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0, 0.0, 0.0, 0.0}};
+  const std::string path = dir.file("p.json");
+  write(path, cloud);
+  const auto back = io::read_posterior_file(path);
+  CHECK(back.chains == 4);
+  REQUIRE(back.convergence.size() == 2);
+  const auto by_name = [&](const std::string& name) {
+    return *std::find_if(back.convergence.begin(), back.convergence.end(),
+                         [&](const fleet::ParameterConvergence& p) { return p.name == name; });
+  };
+  CHECK(by_name("K").rhat == 1.0123);
+  CHECK(by_name("K").mcse_q95 == 3001.125);
+  CHECK(std::isnan(by_name("sigma_if").rhat));  // written as null: no variation to measure
+
+  auto j = nlohmann::json::parse(test::read_text(path));
+  j.erase("checksum");
+  auto refused_at = [&](nlohmann::json edited) {
+    test::write_text(path, edited.dump(1));
+    const auto e = test::data_error([&] { io::read_posterior_file(path); });
+    return e ? e->field() : std::string("(read)");
+  };
+  nlohmann::json bad = j;
+  bad["convergence"]["K"]["rhat"] = "high";
+  CHECK(refused_at(bad) == "convergence.K.rhat");
+  bad = j;
+  bad["convergence"]["K"].erase("ess_tail");
+  CHECK(refused_at(bad) == "convergence.K.ess_tail");
+  bad = j;
+  bad["chains"] = 0;
+  CHECK(refused_at(bad) == "chains");
+  bad = j;
+  bad["convergence"] = 3;
+  CHECK(refused_at(bad) == "convergence");
+  // A file without them (one chain, an SMC run, an older ssrfleet) reads as one chain's.
+  bad = j;
+  bad.erase("chains");
+  bad.erase("convergence");
+  test::write_text(path, bad.dump(1));
+  const auto plain = io::read_posterior_file(path);
+  CHECK(plain.chains == 1);
+  CHECK(plain.convergence.empty());
 }
