@@ -44,7 +44,7 @@ std::string checkpoint_in(const std::string& dir) {
 }  // namespace
 
 TEST_CASE("fit --checkpoint goes on from a checkpoint, over a log grown since, with the bits of a straight fit",
-          "[cli][checkpoint]") {
+          "[cli][checkpoint][heavy]") {
   test::TempDir dir;
   const std::string log = dir.file("log.csv"), head = dir.file("head.csv"), ckpt = dir.file("ckpt");
   REQUIRE(run_ssrfleet("simulate --trucks 70 --seed 2 --quiet --out " + q(log), dir).status == 0);

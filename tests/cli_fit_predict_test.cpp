@@ -182,7 +182,7 @@ TEST_CASE("fit --model refuses a bad spec or the marginal core, listing the cata
   CHECK(!std::filesystem::exists(out));
 }
 
-TEST_CASE("fit --model second_class runs on the marginal core and writes its psi", "[cli][extension]") {
+TEST_CASE("fit --model second_class runs on the marginal core and writes its psi", "[cli][extension][heavy]") {
   test::TempDir dir;
   const std::string log = dir.file("log.csv");
   REQUIRE(run_ssrfleet("simulate --trucks 12 --seed 3 --quiet --out " + q(log), dir).status == 0);

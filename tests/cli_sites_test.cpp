@@ -59,7 +59,7 @@ test::RunResult run_script(const std::string& env, const std::string& script, co
 }  // namespace
 
 TEST_CASE("fit --sites M --site NAME gives the very posterior of fit with that site's log, road and sensors",
-          "[cli][sites]") {
+          "[cli][sites][heavy]") {
   TwoSites s;
   const auto via_manifest = run_ssrfleet("fit --sites " + q(s.manifest) + " --site south --particles 64 --seed 3 --quiet --out " +
                                              q(s.dir.file("m-south.json")),
@@ -91,7 +91,7 @@ TEST_CASE("fit --sites M --site NAME gives the very posterior of fit with that s
 
 TEST_CASE("fit --sites M fits one fleet from every site, and predict --sites M --site NAME predicts a site with its "
           "own traffic",
-          "[cli][sites]") {
+          "[cli][sites][heavy]") {
   TwoSites s;
   const std::string joint = s.dir.file("joint.json");
   const auto fit = run_ssrfleet("fit --sites " + q(s.manifest) + " --particles 64 --seed 3 --quiet --out " + q(joint), s.dir);
@@ -213,7 +213,7 @@ TEST_CASE("a manifest's site whose road does not cover its sensors, or whose log
 }
 
 TEST_CASE("scripts/fit-sites.sh fits every site alone with GNU parallel and collects one table, and a Slurm task fits one",
-          "[cli][sites]") {
+          "[cli][sites][heavy]") {
   TwoSites s;
   const std::string out = s.dir.file("out");
   const auto run = run_script("JOBS=2 THREADS=1", "scripts/fit-sites.sh", q(s.manifest) + " " + q(out) + " --particles 64 --seed 3",
@@ -301,7 +301,7 @@ TEST_CASE("a manifest may leave its logs out for a stream, and fit and sites the
 }
 
 TEST_CASE("sites --check writes a row per site with its conflict p-value and names no site of one fleet",
-          "[cli][sites][conflict]") {
+          "[cli][sites][conflict][heavy]") {
   TwoSites s;
   REQUIRE(run_ssrfleet("simulate --road AS3 --sensors 60,1.5,12 --trucks 24 --seed 5 --quiet --out " + q(s.dir.file("c.csv")),
                        s.dir)
@@ -342,7 +342,7 @@ TEST_CASE("sites --check writes a row per site with its conflict p-value and nam
 using test::write_gained_log;
 
 TEST_CASE("a manifest's known sensor calibration is divided out of its site's records before the fit",
-          "[cli][sites][calibration]") {
+          "[cli][sites][calibration][heavy]") {
   TwoSites s;
   // Gains of 2 and 0.5 multiply and divide a double exactly: the corrected log is the clean log's bits.
   std::vector<double> north(16, 1.0);
@@ -417,7 +417,7 @@ TEST_CASE("a manifest's known sensor calibration is divided out of its site's re
 }
 
 TEST_CASE("fit --sites --calibrate fits every site's sensor gains and records them with standard errors",
-          "[cli][sites][calibration]") {
+          "[cli][sites][calibration][heavy]") {
   TwoSites s;
   const std::string out = s.dir.file("cal.json");
   const std::string written = s.dir.file("calibrated/m.json");

@@ -43,7 +43,7 @@ std::string stream_cmd(const std::string& state, const std::string& log) {
 }  // namespace
 
 TEST_CASE("a stream on a disk that fills up, then on a read-only one, stops with a clear error and resumes exactly",
-          "[cli][stream][faults]") {
+          "[cli][stream][faults][heavy]") {
   test::TempDir dir;
   const std::string log30 = dir.file("log30.csv"), log40 = dir.file("log40.csv");
   REQUIRE(run_ssrfleet("simulate --trucks 40 --seed 6 --quiet --out " + q(log40), dir).status == 0);

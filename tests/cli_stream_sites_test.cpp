@@ -140,7 +140,7 @@ TEST_CASE("stream --sites absorbs every site's records into one fleet and quaran
 }
 
 TEST_CASE("a stream of several sites resumes to the very posterior, and refuses to resume with other sites",
-          "[cli][stream][sites]") {
+          "[cli][stream][sites][heavy]") {
   TwoSiteStream s;
   const std::string all = s.input(s.lines, "all.csv");
   const std::string first = s.input({s.lines.begin(), s.lines.begin() + 9}, "first.csv");
@@ -384,7 +384,7 @@ TEST_CASE("a stream state written before sites (stream format 4, truck records w
 }
 
 TEST_CASE("a stream divides a site's known calibration out of its records, and refuses to resume with another",
-          "[cli][stream][sites][calibration]") {
+          "[cli][stream][sites][calibration][heavy]") {
   TwoSiteStream s;
   const std::string straight = s.dir.file("clean");
   REQUIRE(s.stream(straight, s.input(s.lines, "clean.csv")).status == 0);

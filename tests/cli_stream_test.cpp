@@ -87,7 +87,7 @@ TEST_CASE("a stream gives the same posterior as fit on the same log", "[cli][str
   CHECK(test::read_text(dir.file("fit.json")) == test::read_text(dir.file("state3") + "/posterior.json"));
 }
 
-TEST_CASE("a stream killed with SIGKILL at several points resumes to the bit-identical posterior", "[cli][stream]") {
+TEST_CASE("a stream killed with SIGKILL at several points resumes to the bit-identical posterior", "[cli][stream][heavy]") {
   test::TempDir dir;
   const std::string log = dir.file("log.csv");
   REQUIRE(run_ssrfleet("simulate --trucks 30 --seed 2 --quiet --out " + q(log), dir).status == 0);
@@ -186,7 +186,7 @@ TEST_CASE("a log salted with every kind of bad record absorbs exactly the good o
   CHECK(r.err.find("salted.csv:4: field 'columns'") != std::string::npos);
 }
 
-TEST_CASE("predict reading the state of a running stream always gets a valid posterior", "[cli][stream]") {
+TEST_CASE("predict reading the state of a running stream always gets a valid posterior", "[cli][stream][heavy]") {
   test::TempDir dir;
   const std::string log = dir.file("log.csv");
   REQUIRE(run_ssrfleet("simulate --trucks 40 --seed 3 --quiet --out " + q(log), dir).status == 0);
@@ -214,7 +214,7 @@ TEST_CASE("predict reading the state of a running stream always gets a valid pos
   CHECK(last == 40);
 }
 
-TEST_CASE("the sqlite3 shell reading a running stream's history always sees whole row sets", "[cli][stream][history]") {
+TEST_CASE("the sqlite3 shell reading a running stream's history always sees whole row sets", "[cli][stream][history][heavy]") {
   test::TempDir dir;
   const std::string log = dir.file("log.csv");
   REQUIRE(run_ssrfleet("simulate --trucks 30 --seed 3 --quiet --out " + q(log), dir).status == 0);
@@ -287,7 +287,7 @@ TEST_CASE("a following stream picks up records appended to its input and stops c
 }
 
 TEST_CASE("the stream checkpoint keeps its size while the truck log grows and a torn append is cut off on resume",
-          "[cli][stream]") {
+          "[cli][stream][heavy]") {
   test::TempDir dir;
   const std::string log = dir.file("log.csv");
   REQUIRE(run_ssrfleet("simulate --trucks 40 --seed 5 --quiet --out " + q(log), dir).status == 0);
@@ -398,7 +398,7 @@ TEST_CASE("a second stream on a live state exits at once with status 75 and the 
   CHECK(resumed.err.find("6 trucks in the posterior") != std::string::npos);
 }
 
-TEST_CASE("a truncated or damaged state file is refused by name and never gives a posterior", "[cli][stream]") {
+TEST_CASE("a truncated or damaged state file is refused by name and never gives a posterior", "[cli][stream][heavy]") {
   test::TempDir dir;
   const std::string log = dir.file("log.csv"), state = dir.file("state");
   REQUIRE(run_ssrfleet("simulate --trucks 4 --seed 5 --quiet --out " + q(log), dir).status == 0);

@@ -77,7 +77,7 @@ void require_found(const discrepancy::DiagnoseResult& r, const std::string& sett
 
 }  // namespace
 
-TEST_CASE("diagnose names a 6 % gain on sensor 9 of a 40-truck log and closes the gap", "[discrepancy][diagnose]") {
+TEST_CASE("diagnose names a 6 % gain on sensor 9 of a 40-truck log and closes the gap", "[discrepancy][diagnose][heavy]") {
   const std::string setting = "sensor_gain:sensor=9,gain=1.06";
   auto o = options(256, 3);
   o.candidates = {"sensor_gain", "tyre_damping", "speed_bias"};
@@ -109,7 +109,7 @@ nlohmann::json without_wall_times(nlohmann::json j) {
 
 }  // namespace
 
-TEST_CASE("a diagnose's report does not depend on its thread count", "[discrepancy][diagnose]") {
+TEST_CASE("a diagnose's report does not depend on its thread count", "[discrepancy][diagnose][heavy]") {
   // The power campaign runs one thread per process beside others (diagnose_benchmark --shard), and
   // pools their runs with ones made on two threads: that is sound only if the seed alone fixes the
   // answer. Every number of the report is compared, not just the name: the base fit, each refit,
@@ -125,7 +125,7 @@ TEST_CASE("a diagnose's report does not depend on its thread count", "[discrepan
   CHECK(one.dump() == two.dump());
 }
 
-TEST_CASE("diagnose names a second class of stiffer trucks in a 40-truck log", "[discrepancy][diagnose]") {
+TEST_CASE("diagnose names a second class of stiffer trucks in a 40-truck log", "[discrepancy][diagnose][heavy]") {
   // 30 % of the trucks at 1000 ± 100 kN/m against Table 1's 500 ± 50: steel springs among air.
   const std::string setting = "second_class:share=0.3,K2=1000000,sigma_k2=100000";
   auto o = options(256, 6);
@@ -134,7 +134,7 @@ TEST_CASE("diagnose names a second class of stiffer trucks in a 40-truck log", "
   require_found(r, setting);
 }
 
-TEST_CASE("a refit whose cloud collapses to one point goes on instead of throwing", "[discrepancy][diagnose]") {
+TEST_CASE("a refit whose cloud collapses to one point goes on instead of throwing", "[discrepancy][diagnose][heavy]") {
   // Found by the power campaign (diagnose_benchmark, 50 trucks, seed 108): one candidate's refit
   // resampled every particle from one, and the (K_t, log σ_kt) interweave, a random walk scaled on
   // the cloud's spread, threw "the particle cloud has collapsed to one point". It now skips such a
@@ -145,7 +145,7 @@ TEST_CASE("a refit whose cloud collapses to one point goes on instead of throwin
   CHECK(r.effect == "second_class");
 }
 
-TEST_CASE("diagnose answers none on a 40-truck log with no effect", "[discrepancy][diagnose]") {
+TEST_CASE("diagnose answers none on a 40-truck log with no effect", "[discrepancy][diagnose][heavy]") {
   const auto r = discrepancy::diagnose(as1(), hidden_effect_log("", 40, 5), options(256, 5));
   INFO(discrepancy::diagnosis_to_json(r).dump(1));
   CHECK(r.effect == "none");
@@ -248,7 +248,7 @@ TEST_CASE("long: an effect too small for 100 trucks to reveal is not mistaken fo
   CHECK((r.effect == "none" || r.effect == "sensor_gain"));
 }
 
-TEST_CASE("diagnose names two effects hidden at once, one after the other, and the gap closes", "[discrepancy][diagnose]") {
+TEST_CASE("diagnose names two effects hidden at once, one after the other, and the gap closes", "[discrepancy][diagnose][heavy]") {
   // A 6 % gain on sensor 9 and a heavier unsprung mass (600 kg against 420) in one 40-truck log.
   const auto& site = as1();
   const auto trucks = fleet::draw_fleet(fleet::FleetDistribution{}, 40, site.lateral_min_m(), site.lateral_max_m(), 3);

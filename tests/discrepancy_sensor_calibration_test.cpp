@@ -70,7 +70,7 @@ struct MiscalibratedSites {
 }  // namespace
 
 TEST_CASE("sensor calibration by Monte Carlo EM recovers a sensor's gain and a site's, within their standard errors",
-          "[sensor_calibration]") {
+          "[sensor_calibration][heavy]") {
   MiscalibratedSites s(80);
   discrepancy::CalibrationOptions o;
   o.draws.threads = 2;
@@ -102,7 +102,7 @@ TEST_CASE("sensor calibration by Monte Carlo EM recovers a sensor's gain and a s
   CHECK(done.fit->trucks_seen() == 160);
 }
 
-TEST_CASE("the M-step's gains do not depend on the thread count, and bad options are refused", "[sensor_calibration]") {
+TEST_CASE("the M-step's gains do not depend on the thread count, and bad options are refused", "[sensor_calibration][heavy]") {
   MiscalibratedSites s(30);
   const auto fit = s.fitter()(s.records);
   discrepancy::MarginalDrawOptions o{.draws = 6, .mh_steps = 4, .seed = 3, .threads = 1};

@@ -69,7 +69,7 @@ TEST_CASE("the site check's reference tail is the chi-square with 4 degrees of f
 }
 
 TEST_CASE("of three sites, the one whose fleet differs is named, and none of three sites of one fleet is",
-          "[sites][conflict]") {
+          "[sites][conflict][heavy]") {
   // 40 trucks a site. The odd site is named in the first round, against the two others; those two
   // are then checked against each other and agree.
   {
@@ -123,7 +123,7 @@ TEST_CASE("of five sites, the one whose fleet differs is named, and none of five
   }
 }
 
-TEST_CASE("two sites that conflict are both marked undecided and neither is named", "[sites][conflict]") {
+TEST_CASE("two sites that conflict are both marked undecided and neither is named", "[sites][conflict][heavy]") {
   FiveSites c(1, 2, 40);
   const auto result = discrepancy::check_site_conflicts(c.pointers(), c.logs, options());
   REQUIRE(result.size() == 2);

@@ -135,7 +135,7 @@ TEST_CASE("a truck's marginal likelihood over several sites is its own site's, t
 }
 
 TEST_CASE("the joint log posterior of several sites is the sum of each site's, up to the tables' quadrature",
-          "[joint_sites]") {
+          "[joint_sites][heavy]") {
   ThreeSites c(12);
   fleet::MarginalSmc joint(c.pointers(), fleet::MarginalSmc::Options{});
   for (const auto& r : fleet::merge_site_records(c.logs)) joint.absorb(r);
@@ -159,7 +159,7 @@ TEST_CASE("the joint log posterior of several sites is the sum of each site's, u
   }
 }
 
-TEST_CASE("a fit of three sites is sharper than each site's alone and covers the fleet's truth", "[joint_sites]") {
+TEST_CASE("a fit of three sites is sharper than each site's alone and covers the fleet's truth", "[joint_sites][heavy]") {
   ThreeSites c(80);
   const fleet::HyperVector truth{500e3, 50e3, 1950e3, 195e3, 1.5, 0.5, 0.02};
   auto joint = fleet::make_online_fit(c.pointers(), fit_options(1024, 2, 5));
@@ -196,7 +196,7 @@ TEST_CASE("a fit of three sites is sharper than each site's alone and covers the
 }
 
 TEST_CASE("a fit of several sites resumes bit-identically at any thread count, and refuses another set of sites",
-          "[joint_sites]") {
+          "[joint_sites][heavy]") {
   ThreeSites c(10);
   const auto records = fleet::merge_site_records(c.logs);
   auto straight = fleet::make_online_fit(c.pointers(), fit_options(64, 2, 8));

@@ -108,7 +108,7 @@ TEST_CASE("the marginal core gives the same bits with 1 and 2 threads", "[margin
 
 TEST_CASE("tables prebuilt one truck per thread give the bits of tables built one at a time, across "
           "frozen spans, rebuilds and a resume",
-          "[marginal]") {
+          "[marginal][heavy]") {
   // 240 trucks: from truck 64 on the new trucks' table options are frozen for spans of 2 to 7
   // trucks, and the tables are rebuilt at least once after that (the lattice follows the fleet sds'
   // posterior), so some spans are cut short by a rebuild and their prebuilt tables thrown away.
@@ -264,7 +264,7 @@ TEST_CASE("a marginal-core checkpoint resumes bit-identically, and an old or cut
   CHECK_THROWS_WITH(restore_from(wider, saved), Catch::Contains("holds 64 particles") && Catch::Contains("--particles 64"));
 }
 
-TEST_CASE("the marginal core's posterior agrees with the exact batch MCMC on a small fleet", "[marginal][mcmc]") {
+TEST_CASE("the marginal core's posterior agrees with the exact batch MCMC on a small fleet", "[marginal][mcmc][heavy]") {
   // 40 trucks: the exact latent MCMC mixes well here (no truck's lateral position is bimodal
   // enough to trap its chain, checked by the chains' acceptance); both runs have fixed seeds.
   Case c(40, 4);
@@ -335,7 +335,7 @@ TEST_CASE("the replay driver runs the schedule's final sweeps after the last tru
   CHECK_THROWS_AS(fleet::replay(*none, c.log.records, no_final), UsageError);
 }
 
-TEST_CASE("the tables check their lateral approximation: within budget on AS1 and AS2 and flagged without pieces", "[marginal]") {
+TEST_CASE("the tables check their lateral approximation: within budget on AS1 and AS2 and flagged without pieces", "[marginal][heavy]") {
   auto mean_error = [](const char* road, const fleet::FleetDistribution& d, double noise, bool pieces,
                        std::string* warning) {
     const site::Site site(site::load_road(road), site::SiteOptions{});
@@ -444,7 +444,7 @@ TEST_CASE("the final sweeps' clouds are pooled into the posterior until the next
 }
 
 TEST_CASE("the pooled final sweeps estimate the posterior means with less Monte Carlo error, and the same ones",
-          "[marginal][statistical]") {
+          "[marginal][statistical][heavy]") {
   // 16 SMC seeds on one 40-truck log, 1024 particles and 15 final sweeps (fit's defaults). For each
   // hyperparameter the scatter of the 16 posterior means over its posterior sd, squared, is 1 / the
   // equivalent ESS; summed over the 7, for the last cloud alone and for the pool. Measured with 24

@@ -48,7 +48,7 @@ TEST_CASE("MCMC chains: chain 0 is the one-chain run, the others start elsewhere
 }
 
 TEST_CASE("MCMC chains that sample one posterior agree by R-hat, and the posterior file keeps their diagnostics",
-          "[fleet][mcmc][chains]") {
+          "[fleet][mcmc][chains][heavy]") {
   const test::SimulatedCase c(10, 4);
   auto o = small_run(4, 2);
   o.chain.iterations = 20000;

@@ -503,7 +503,7 @@ TEST_CASE("batch MCMC on the paper's 100-truck case brackets the true hyperparam
   CHECK(0.5 <= s[fleet::kSigmaZ].q975);
 }
 
-TEST_CASE("lateral jumps let the batch MCMC cross between lateral modes on AS2", "[mcmc]") {
+TEST_CASE("lateral jumps let the batch MCMC cross between lateral modes on AS2", "[mcmc][heavy]") {
   // A fleet on road AS2 whose trucks' z-likelihoods are broad and many-peaked across the lane: the
   // random walk on (k, k_t, z) stays in the peak each truck starts in (its best fit), and sigma_z
   // stays where those starts put it.

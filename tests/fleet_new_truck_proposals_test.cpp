@@ -62,7 +62,7 @@ std::string bytes_of(const fleet::FleetSmc& smc) {
 
 TEST_CASE("with table proposals the latent core estimates the evidence the marginal core and the prior-drawing "
           "latent core estimate",
-          "[fleet][proposals]") {
+          "[fleet][proposals][heavy]") {
   // 30 Table 1 trucks. The three estimates are of one number, log p(y_1..30); each has its own
   // Monte Carlo error, measured here over seeds rather than assumed: the test asks the means to
   // agree within 4 standard errors of their difference (plus 0.5 nats for the marginal core's

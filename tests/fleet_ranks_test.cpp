@@ -89,7 +89,7 @@ void restore_from(fleet::MarginalSmc& smc, const Checkpoint& bytes) {
 
 }  // namespace
 
-TEST_CASE("a marginal fit of two sites split over 2 or 3 ranks has the bits of one process", "[marginal][ranks]") {
+TEST_CASE("a marginal fit of two sites split over 2 or 3 ranks has the bits of one process", "[marginal][ranks][heavy]") {
   const TwoSites c(30, 3);
   fleet::MarginalSmc one(c.sites, options(nullptr));
   absorb(one, c.records, 0, c.records.size());

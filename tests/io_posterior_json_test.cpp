@@ -84,7 +84,7 @@ TEST_CASE("a posterior file carries a checksum and reads back bit for bit", "[io
 }
 
 TEST_CASE("a posterior file cut at any 1 KiB offset or with any byte flipped is refused by name or reads the same",
-          "[io][posterior]") {
+          "[io][posterior][heavy]") {
   test::TempDir dir;
   const auto cloud = random_cloud(64, 11, true);
   const std::string path = dir.file("posterior.json");

@@ -75,7 +75,7 @@ Moments exact_moments(const site::Site& site, const records::WimRecord& r, const
 
 }  // namespace
 
-TEST_CASE("latents drawn from a marginal-core fit follow the exact conditional of k, k_t and z", "[discrepancy][model]") {
+TEST_CASE("latents drawn from a marginal-core fit follow the exact conditional of k, k_t and z", "[discrepancy][model][heavy]") {
   const site::Site site(site::load_road("AS1"), site::SiteOptions{});
   const auto trucks = fleet::draw_fleet(fleet::FleetDistribution{}, 30, site.lateral_min_m(), site.lateral_max_m(), 5);
   const auto log = fleet::simulate_log(site, trucks, 0.02, 5);

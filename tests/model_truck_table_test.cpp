@@ -65,7 +65,7 @@ TEST_CASE("Gauss-Legendre rules integrate polynomials of degree 2n-1 exactly", "
   }
 }
 
-TEST_CASE("a truck table's marginal likelihood agrees with brute-force integration over k, k_t and z", "[model]") {
+TEST_CASE("a truck table's marginal likelihood agrees with brute-force integration over k, k_t and z", "[model][heavy]") {
   const site::Site site(site::load_road("AS1"), site::SiteOptions{});
   const auto trucks = fleet::draw_fleet(fleet::FleetDistribution{}, 3, site.lateral_min_m(), site.lateral_max_m(), 11);
   const auto log = fleet::simulate_log(site, trucks, 0.02, 11);
@@ -108,7 +108,7 @@ TEST_CASE("a truck table's marginal likelihood agrees with brute-force integrati
   }
 }
 
-TEST_CASE("where z is broad and many-peaked the table cuts it into pieces and still matches brute force", "[model]") {
+TEST_CASE("where z is broad and many-peaked the table cuts it into pieces and still matches brute force", "[model][heavy]") {
   // The second fleet on road AS2 (test::second_fleet, σ_z = 0.35 m, σ_IF = 0.03): a node's
   // z-likelihood spreads up to 0.66 m (sd) across the lane in several peaks. One moment-matched
   // Gaussian per node was off by up to 0.23 nats per truck, and the fleet posterior of σ_z by 25

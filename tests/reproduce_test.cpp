@@ -52,7 +52,7 @@ std::string measured_column(const std::string& md) {
 }
 }  // namespace
 
-TEST_CASE("reproduce on a reduced configuration writes every figure's data and a filled summary", "[cli][reproduce]") {
+TEST_CASE("reproduce on a reduced configuration writes every figure's data and a filled summary", "[cli][reproduce][heavy]") {
   test::TempDir dir;
   const std::string common = " --trucks 12 --particles 128 --threads 2 --draws 20 --trucks-per-draw 20 --no-plots";
   const auto r1 = run_ssrfleet("reproduce --seed 3 --out " + q(dir.file("r1")) + common, dir);
@@ -109,7 +109,7 @@ TEST_CASE("reproduce rejects a bad configuration with a usage error", "[cli][rep
   CHECK(run_ssrfleet("reproduce --seed -1 --out " + q(dir.file("x")), dir).status == 64);
 }
 
-TEST_CASE("reproduce fits a model to data with an effect hidden in it and writes its posterior", "[cli][reproduce][extension]") {
+TEST_CASE("reproduce fits a model to data with an effect hidden in it and writes its posterior", "[cli][reproduce][extension][heavy]") {
   test::TempDir dir;
   const auto r = run_ssrfleet("reproduce --seed 3 --quiet --trucks 12 --particles 128 --draws 10 --trucks-per-draw 10 "
                               "--no-plots --model speed_bias --effect speed_bias:factor=1.1 --out " + q(dir.file("r")), dir);

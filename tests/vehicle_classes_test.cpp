@@ -170,7 +170,7 @@ TEST_CASE("simulate --fleet-mix writes each truck's class in the shares asked fo
   CHECK(bad.err.find("sum to 0.9") != std::string::npos);
 }
 
-TEST_CASE("fit gives each vehicle class its own posterior, near its own truth", "[cli][classes][fit]") {
+TEST_CASE("fit gives each vehicle class its own posterior, near its own truth", "[cli][classes][fit][heavy]") {
   test::TempDir dir;
   const std::string log = dir.file("log.csv"), post = dir.file("post.json");
   REQUIRE(run_ssrfleet(std::string("simulate --trucks 80 --seed 21 --quiet --fleet-mix '") + kTwoClasses + "' --out " + q(log),
@@ -242,7 +242,7 @@ TEST_CASE("a one-class log fits exactly as the same log without its class column
   CHECK(fleet::class_seed(7, "") == 7);  // an unlabelled log keeps the seed
 }
 
-TEST_CASE("predict combines classes by traffic share, or as the user mixes them", "[cli][classes][predict]") {
+TEST_CASE("predict combines classes by traffic share, or as the user mixes them", "[cli][classes][predict][heavy]") {
   const TwoClassFit& f = two_class_fit();
   const auto classes = io::read_posterior_classes(f.post);
   REQUIRE(classes.size() == 2);
@@ -360,7 +360,7 @@ TEST_CASE("damage combines classes: the mixture's moments, by share", "[cli][cla
   }
 }
 
-TEST_CASE("a class-labelled stream resumes exactly, and quarantines a class outside a fixed list", "[cli][classes][stream]") {
+TEST_CASE("a class-labelled stream resumes exactly, and quarantines a class outside a fixed list", "[cli][classes][stream][heavy]") {
   test::TempDir dir;
   const std::string log = dir.file("log.csv");
   REQUIRE(run_ssrfleet(std::string("simulate --trucks 16 --seed 9 --quiet --fleet-mix '") + kTwoClasses + "' --out " + q(log),
