@@ -14,6 +14,7 @@
 
 #include "fleet/online_fit.hpp"
 #include "fleet/posterior_cloud.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "io/wim_log.hpp"
 #include "site/site.hpp"
 
@@ -68,8 +69,9 @@ fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records
 
 // One independent posterior per vehicle class of `records` (an unlabelled log is one class with the
 // empty label and the seed itself), each fitted by fit_class(class records, fleet::class_seed(seed,
-// label)), written as one posterior file to `out` ('-' = stdout).
-void fit_classes_to_file(const std::vector<records::WimRecord>& records, std::uint64_t seed, const std::string& out,
+// label)), written as one posterior file to `out` ('-' = stdout). Returns the classes' posteriors
+// (sorted by label).
+fleet::ClassPosteriors fit_classes_to_file(const std::vector<records::WimRecord>& records, std::uint64_t seed, const std::string& out,
                          std::ostream* progress,
                          const std::function<fleet::PosteriorCloud(const std::vector<records::WimRecord>&, std::uint64_t)>& fit_class);
 
