@@ -2,6 +2,7 @@
 // (docs/draws.md), for notebooks (numpy, pandas, xarray, ArviZ).
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <string>
 
 #include "cli_common.hpp"
@@ -13,6 +14,7 @@
 #include "io/draws_netcdf.hpp"
 #include "io/posterior_json.hpp"
 #include "io/wim_log.hpp"
+#include "site/road_source.hpp"
 #include "util/errors.hpp"
 
 namespace ssrfleet::cli {
@@ -24,25 +26,32 @@ DrawsFormat draws_format(const std::string& path, const std::string& option) {
   throw UsageError(option + " '" + path + "': the format follows the extension, .csv (CSV) or .nc (NetCDF4)");
 }
 
-void write_draws(const std::string& path, const fleet::PosteriorCloud& cloud,
-                 const std::vector<records::WimRecord>* observed) {
+void write_draws(const std::string& path, const fleet::PosteriorCloud& cloud, const DrawsExtras& extras) {
   const fleet::EqualWeightDraws draws = fleet::equal_weight_draws(cloud);
   if (draws_format(path, "--out") == DrawsFormat::csv) {
     write_output(path, [&](std::ostream& os) { io::write_draws_csv(os, draws, cloud.psi_names); });
     return;
   }
   const io::DrawsFileInfo info{io::iso_utc_now(), SSRFLEET_VERSION};
-  if (observed == nullptr) {
+  if (extras.observed == nullptr) {
     io::write_draws_netcdf(path, cloud, draws, info);
     return;
   }
-  const io::ObservedLog log = io::observed_log_of(*observed);
-  io::write_draws_netcdf(path, cloud, draws, info, &log);
+  const io::ObservedLog log = io::observed_log_of(*extras.observed);
+  if (extras.site == nullptr || extras.predictive_draws < 1 || extras.predictive_trucks < 1) {
+    io::write_draws_netcdf(path, cloud, draws, info, &log);
+    return;
+  }
+  const auto predictive = fleet::posterior_predictive_draws(*extras.site, cloud, draws, *extras.observed,
+                                                            extras.predictive_draws, extras.predictive_trucks,
+                                                            extras.seed);
+  io::write_draws_netcdf(path, cloud, draws, info, &log, &predictive);
 }
 
 int run_draws(int argc, const char* const argv[]) {
-  std::string posterior_path, out, log_path, class_label;
-  double m1_kg = SiteFlags{}.m1_kg;
+  std::string posterior_path, out, log_path, class_label, road, seed_text = "1";
+  long predictive_draws = fleet::kPredictiveDrawsCap, predictive_trucks = fleet::kPredictiveTrucksCap;
+  SiteFlags site_flags;
   bool quiet = false;
   po::options_description desc("draws options");
   desc.add_options()
@@ -55,9 +64,17 @@ int run_draws(int argc, const char* const argv[]) {
        "constant_data (speeds and masses)")
       ("class", po::value(&class_label)->value_name("LABEL"),
        "a posterior of vehicle classes: the draws of this class (each class is its own file)")
-      ("m1", po::value(&m1_kg)->value_name("KG")->default_value(m1_kg, shortest_text(m1_kg)),
-       "unsprung mass (kg), to read a log of tyre forces as impact factors")
+      ("predictive-draws", po::value(&predictive_draws)->value_name("N")->default_value(predictive_draws),
+       "with --log: posterior_predictive for N draws of each chain, spread evenly over it (0: none)")
+      ("predictive-trucks", po::value(&predictive_trucks)->value_name("N")->default_value(predictive_trucks),
+       "with --log: the posterior predictive of the log's first N trucks")
+      ("road", po::value(&road)->value_name("ROAD"),
+       "the fitted road, for the posterior predictive (default: the road the posterior names); with the site "
+       "options below it must make the fitted site")
+      ("seed", po::value(&seed_text)->value_name("SEED")->default_value(seed_text),
+       "random seed of the posterior predictive (a whole number)")
       ("quiet,q", po::bool_switch(&quiet), "no summary on standard error");
+  site_flags.add_to(desc);
   po::positional_options_description positional;
   positional.add("posterior", 1);
   po::variables_map vm;
@@ -72,6 +89,10 @@ int run_draws(int argc, const char* const argv[]) {
   if (posterior_path.empty()) throw UsageError("draws needs a posterior: POSTERIOR (see --help)");
   if (out.empty()) throw UsageError("draws needs --out FILE.csv or FILE.nc (see --help)");
   const DrawsFormat format = draws_format(out, "--out");
+  const std::uint64_t seed = parse_seed(seed_text);
+  if (predictive_draws < 0 || predictive_trucks < 0 || predictive_draws > 1'000'000 || predictive_trucks > 10'000'000) {
+    throw UsageError("--predictive-draws / --predictive-trucks: need 0 <= draws <= 1e6 and 0 <= trucks <= 1e7");
+  }
   if (format == DrawsFormat::csv && !log_path.empty()) {
     throw UsageError("--log fills the NetCDF file's observed_data; a CSV holds the draws alone: write FILE.nc");
   }
@@ -99,7 +120,7 @@ int run_draws(int argc, const char* const argv[]) {
     }
     int sensors = 0;
     std::size_t header_line = 1;
-    records = io::read_wim_log_file(log_path, m1_kg, &sensors, {}, &header_line);
+    records = io::read_wim_log_file(log_path, site_flags.m1_kg, &sensors, {}, &header_line);
     if (sensors != cloud.sensors) {
       throw DataError(log_path, header_line, "if_" + std::to_string(sensors),
                       "the log has " + std::to_string(sensors) + " sensors but the posterior's site has " +
@@ -115,7 +136,22 @@ int run_draws(int argc, const char* const argv[]) {
                           std::to_string(cloud.trucks_seen) + ": give the log it was fitted to");
     }
   }
-  write_draws(out, cloud, log_path.empty() ? nullptr : &records);
+  DrawsExtras extras;
+  std::optional<site::Site> site;
+  if (!log_path.empty()) {
+    extras.observed = &records;
+    if (format == DrawsFormat::netcdf && predictive_draws > 0 && predictive_trucks > 0) {
+      site.emplace(site::load_road(road.empty() ? cloud.road_name : road, &std::cerr), site_flags.to_options());
+      require_fitted_site(cloud, posterior_path, *site,
+                          "; give the fit's --road and site options, or --predictive-draws 0 to leave the posterior "
+                          "predictive out");
+      extras.site = &*site;
+    }
+  }
+  extras.predictive_draws = predictive_draws;
+  extras.predictive_trucks = predictive_trucks;
+  extras.seed = seed;
+  write_draws(out, cloud, extras);
   if (!quiet) {
     const int chains = cloud.method == "mcmc" ? cloud.chains : 1;
     std::cerr << "ssrfleet draws: " << chains << (chains == 1 ? " chain" : " chains") << " x "

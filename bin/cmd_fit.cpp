@@ -145,7 +145,13 @@ int run_fit(int argc, const char* const argv[]) {
                         return cloud;
                       });
   // Rank 0 writes for every rank (the ranks hold the same posterior).
-  if (!draws_out.empty() && process_ranks().rank() == 0) write_draws(draws_out, classes.front().cloud, &records);
+  if (!draws_out.empty() && process_ranks().rank() == 0) {
+    DrawsExtras extras;
+    extras.observed = &records;
+    extras.site = &site;
+    extras.seed = seed;
+    write_draws(draws_out, classes.front().cloud, extras);
+  }
   if (!quiet) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cerr << "ssrfleet fit: done in " << std::fixed << std::setprecision(1) << s << " s -> " << out << "\n";

@@ -84,7 +84,7 @@ def check_fit(name, posterior_path, nc_path, csv_path, log_path):
 
     with netCDF4.Dataset(nc_path) as root:
         groups = sorted(root.groups)
-    check(groups == ["constant_data", "observed_data", "posterior", "sample_stats"],
+    check(groups == ["constant_data", "observed_data", "posterior", "posterior_predictive", "sample_stats"],
           f"{name}: groups {groups}")
     opened = {g: xr.open_dataset(nc_path, group=g) for g in groups}
     for g, ds in opened.items():
@@ -126,6 +126,21 @@ def check_fit(name, posterior_path, nc_path, csv_path, log_path):
     check(np.array_equal(y.values, observed), f"{name}: observed if differs from the log")
     check(y["truck"].values.tolist() == log["truck_id"].tolist(), f"{name}: truck ids")
     check(np.array_equal(opened["constant_data"]["speed_mps"].values, log["speed_mps"]), f"{name}: speeds")
+
+    pp = opened["posterior_predictive"]["if"]
+    n = min(100, draws)
+    check(pp.dims == ("chain", "draw", "truck", "sensor"), f"{name}: posterior_predictive dims {pp.dims}")
+    check(pp.shape == (chains, n, len(log), len(if_columns)), f"{name}: posterior_predictive shape {pp.shape}")
+    check(np.array_equal(pp["draw"].values, np.floor((np.arange(n) + 0.5) * draws / n).astype(np.int64)),
+          f"{name}: posterior_predictive draw numbers")
+    check(pp["truck"].values.tolist() == log["truck_id"].tolist(), f"{name}: posterior_predictive trucks")
+    # Each sensor's mean impact factor: the predictive's (chains x n x trucks values) against the
+    # log's (10 trucks); 5 standard errors of the difference, so 16 sensors pass by chance alone
+    # with probability 1 - 1e-5.
+    predicted = pp.values.reshape(-1, len(if_columns))
+    error = np.sqrt(observed.var(axis=0, ddof=1) / len(observed) + predicted.var(axis=0, ddof=1) / len(predicted))
+    worst = np.max(np.abs(predicted.mean(axis=0) - observed.mean(axis=0)) / error)
+    check(worst < 5.0, f"{name}: a sensor's predictive mean is {worst:.1f} standard errors from the log's")
 
     rows = np.genfromtxt(csv_path, delimiter=",", names=True)
     check(list(rows.dtype.names) == ["chain", "draw"] + HYPER, f"{name}: CSV columns {rows.dtype.names}")

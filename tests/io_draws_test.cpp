@@ -185,6 +185,12 @@ TEST_CASE("the NetCDF draws file reads back through the C API: groups, dims, val
   auto groups = io::netcdf_groups(path);
   std::sort(groups.begin(), groups.end());
   CHECK(groups == std::vector<std::string>{"constant_data", "observed_data", "posterior", "sample_stats"});
+  // A posterior predictive of the wrong shape is a bug of the caller's.
+  fleet::PosteriorPredictiveDraws wrong;
+  wrong.draw_index = {0, 1};
+  wrong.trucks = 4;
+  wrong.impact_factor.resize(3, 3);
+  CHECK_THROWS_AS(io::write_draws_netcdf(dir.file("w.nc"), cloud, draws, {"t", "v"}, &log, &wrong), std::invalid_argument);
   for (int h = 0; h < fleet::kHyperCount; ++h) {
     const auto v = io::read_netcdf_variable(path, "posterior", std::string(fleet::kHyperNames[static_cast<std::size_t>(h)]));
     CHECK(v.dims == std::vector<std::string>{"chain", "draw"});
@@ -253,9 +259,30 @@ TEST_CASE("ssrfleet draws and fit --draws-out write the draws, with the log as o
   CHECK(r.err.find("1 chain x 128 draws") != std::string::npos);
   CHECK(io::read_netcdf_variable(f.dir.file("d.nc"), "posterior", "Z").values ==
         io::read_netcdf_variable(f.dir.file("fit.nc"), "posterior", "Z").values);
+  // The posterior predictive: the cap's 100 draws of the one chain x the log's 10 trucks, the same
+  // bits from fit and from draws for the same seed.
+  const auto predictive = io::read_netcdf_variable(f.dir.file("fit.nc"), "posterior_predictive", "if");
+  CHECK(predictive.dims == std::vector<std::string>{"chain", "draw", "truck", "sensor"});
+  CHECK(predictive.shape == std::vector<std::size_t>{1, 100, 10, 16});
+  CHECK(predictive.values == io::read_netcdf_variable(f.dir.file("d.nc"), "posterior_predictive", "if").values);
+  const auto numbers = io::read_netcdf_variable(f.dir.file("fit.nc"), "posterior_predictive", "draw").values;
+  CHECK(numbers[0] == 0.0);  // floor(0.5 x 128 / 100)
+  CHECK(numbers[99] == 127.0);
   REQUIRE(test::run_ssrfleet("draws '" + f.posterior + "' -q --out '" + f.dir.file("d.csv") + "'", f.dir).status == 0);
   const std::string csv = test::read_text(f.dir.file("d.csv"));
   CHECK(std::count(csv.begin(), csv.end(), '\n') == 129);
+  // --predictive-draws 0: no posterior_predictive; a fingerprint that is not the fit's is refused.
+  REQUIRE(test::run_ssrfleet("draws '" + f.posterior + "' -q --log '" + f.log + "' --predictive-draws 0 --out '" +
+                                 f.dir.file("o.nc") + "'",
+                             f.dir)
+              .status == 0);
+  CHECK(io::netcdf_groups(f.dir.file("o.nc")).size() == 4);
+  const auto other = test::run_ssrfleet("draws '" + f.posterior + "' -q --log '" + f.log + "' --road AS2 --out '" +
+                                            f.dir.file("w.nc") + "'",
+                                        f.dir);
+  CHECK(other.status == 64);
+  CHECK(other.err.find("--predictive-draws 0") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(f.dir.file("w.nc")));
   // Without --log: no observed_data.
   REQUIRE(test::run_ssrfleet("draws '" + f.posterior + "' -q --out '" + f.dir.file("n.nc") + "'", f.dir).status == 0);
   CHECK(io::netcdf_groups(f.dir.file("n.nc")).size() == 2);

@@ -58,11 +58,15 @@ class Group {
   }
   // A dimension with its integer coordinate variable 0..n-1 (what ArviZ gives chain and draw).
   int index_dim(const std::string& name, std::size_t n) {
-    const int dim = def_dim(name, n);
     std::vector<long long> values(n);
     for (std::size_t i = 0; i < n; ++i) values[i] = static_cast<long long>(i);
+    return numbered_dim(name, values);
+  }
+  // A dimension whose integer coordinate holds `values` (a subset's own numbers).
+  int numbered_dim(const std::string& name, const std::vector<long long>& values) {
+    const int dim = def_dim(name, values.size());
     const int var = def_var(name, NC_INT64, {dim});
-    if (n > 0) file_.check(nc_put_var_longlong(id_, var, values.data()), name_ + "/" + name);
+    if (!values.empty()) file_.check(nc_put_var_longlong(id_, var, values.data()), name_ + "/" + name);
     return dim;
   }
   // A dimension whose coordinate is text (truck ids, parameter names).
@@ -197,12 +201,13 @@ void write_observed(const NcFile& file, const fleet::PosteriorCloud& cloud, cons
 }
 
 void write_predictive(const NcFile& file, const fleet::PosteriorCloud& cloud, const fleet::EqualWeightDraws& draws,
-                      const ObservedLog& log, const PredictiveDraws& p, const DrawsFileInfo& info) {
+                      const ObservedLog& log, const fleet::PosteriorPredictiveDraws& p, const DrawsFileInfo& info) {
   Group g(file, "posterior_predictive");
   common_attributes(g, cloud, info);
   const std::vector<std::string> ids(log.truck_id.begin(), log.truck_id.begin() + p.trucks);
+  const std::vector<long long> draw_numbers(p.draw_index.begin(), p.draw_index.end());
   const std::vector<int> dims = {g.index_dim("chain", static_cast<std::size_t>(draws.chains)),
-                                 g.index_dim("draw", static_cast<std::size_t>(p.draws)), g.string_dim("truck", ids),
+                                 g.numbered_dim("draw", draw_numbers), g.string_dim("truck", ids),
                                  g.index_dim("sensor", static_cast<std::size_t>(p.impact_factor.cols()))};
   std::vector<double> values(static_cast<std::size_t>(p.impact_factor.size()));
   std::size_t i = 0;
@@ -213,7 +218,7 @@ void write_predictive(const NcFile& file, const fleet::PosteriorCloud& cloud, co
 }
 
 void check_sizes(const fleet::PosteriorCloud& cloud, const fleet::EqualWeightDraws& draws, const ObservedLog* observed,
-                 const PredictiveDraws* predictive) {
+                 const fleet::PosteriorPredictiveDraws* predictive) {
   const auto fail = [](const std::string& what) { throw std::invalid_argument("io::write_draws_netcdf(): " + what); };
   if (draws.theta.rows() != fleet::kHyperCount || draws.theta.cols() != draws.chains * draws.draws ||
       static_cast<Eigen::Index>(draws.source.size()) != draws.theta.cols()) {
@@ -229,8 +234,9 @@ void check_sizes(const fleet::PosteriorCloud& cloud, const fleet::EqualWeightDra
   }
   if (predictive != nullptr) {
     if (observed == nullptr) fail("posterior predictive without the observed log");
-    if (predictive->draws > draws.draws || predictive->trucks > observed->impact_factor.rows() ||
-        predictive->impact_factor.rows() != draws.chains * predictive->draws * predictive->trucks ||
+    const auto n = static_cast<Eigen::Index>(predictive->draw_index.size());
+    if (n > draws.draws || predictive->trucks > observed->impact_factor.rows() ||
+        predictive->impact_factor.rows() != draws.chains * n * predictive->trucks ||
         predictive->impact_factor.cols() != observed->impact_factor.cols()) {
       fail("posterior predictive's shape does not match the draws and the log");
     }
@@ -272,7 +278,7 @@ ObservedLog observed_log_of(const std::vector<records::WimRecord>& records) {
 
 void write_draws_netcdf(const std::string& path, const fleet::PosteriorCloud& cloud,
                         const fleet::EqualWeightDraws& draws, const DrawsFileInfo& info, const ObservedLog* observed,
-                        const PredictiveDraws* predictive) {
+                        const fleet::PosteriorPredictiveDraws* predictive) {
   check_sizes(cloud, draws, observed, predictive);
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   try {

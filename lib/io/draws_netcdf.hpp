@@ -9,7 +9,9 @@
 //                       `ess_tail`, `mcse_mean`, `mcse_q05`, `mcse_q95`;
 //   observed_data       `if` (truck, sensor), when the fitted log is given;
 //   constant_data       `speed_mps`, `sprung_mass_kg` (truck), with the observed data;
-//   posterior_predictive `if` (chain, draw, truck, sensor), when predictive draws are given.
+//   posterior_predictive `if` (chain, draw, truck, sensor), when predictive draws are given
+//                       (fleet/posterior_predictive_draws.hpp: a subset, its `draw` coordinate the
+//                       posterior's draw numbers, its trucks the log's first ones).
 // Every group carries ArviZ's attributes (`created_at`, `inference_library` = "ssrfleet",
 // `inference_library_version`) and the fit's: `model_spec`, `method`, `road`, `site_fingerprint`,
 // `trucks_seen`. netcdf.h stays inside io: the readers below are what tests and tools use to look in.
@@ -23,6 +25,7 @@
 
 #include "fleet/equal_weight_draws.hpp"
 #include "fleet/posterior_cloud.hpp"
+#include "fleet/posterior_predictive_draws.hpp"
 #include "records/wim_record.hpp"
 
 namespace ssrfleet::io {
@@ -43,20 +46,13 @@ struct ObservedLog {
 // std::invalid_argument when the records' sensor counts differ.
 ObservedLog observed_log_of(const std::vector<records::WimRecord>& records);
 
-// Simulated impact factors for posterior_predictive: predictive(t, s) of draw (chain c, draw d) at
-// row (c * draws + d) * trucks + t, for the first `draws` draws of each chain and the first
-// `trucks` trucks of the observed log.
-struct PredictiveDraws {
-  Eigen::Index draws = 0, trucks = 0;
-  Eigen::MatrixXd impact_factor;  // (chains * draws * trucks) x sensors
-};
-
 // Writes `path` through a temporary sibling renamed over it (no partial file on any failure).
 // observed, predictive: optional (null: the group is left out). IoError naming the path on a
 // failure to write; std::invalid_argument when the pieces disagree in their sizes.
 void write_draws_netcdf(const std::string& path, const fleet::PosteriorCloud& cloud,
                         const fleet::EqualWeightDraws& draws, const DrawsFileInfo& info,
-                        const ObservedLog* observed = nullptr, const PredictiveDraws* predictive = nullptr);
+                        const ObservedLog* observed = nullptr,
+                        const fleet::PosteriorPredictiveDraws* predictive = nullptr);
 
 // Reading back (tests, tools): the file's group names; a variable's dims, shape and values as
 // doubles (integers converted); a text attribute. A missing file is MissingInputError; a missing
