@@ -154,7 +154,8 @@ int run_fit(int argc, const char* const argv[]) {
   }
   if (!quiet) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::cerr << "ssrfleet fit: done in " << std::fixed << std::setprecision(1) << s << " s -> " << out << "\n";
+    std::cerr << "ssrfleet fit: done in " << std::fixed << std::setprecision(1) << s << " s -> " << out
+              << (draws_out.empty() ? "" : ", draws -> " + draws_out) << "\n";
   }
   return 0;
 }

@@ -3,6 +3,7 @@
 #include <netcdf.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -69,13 +70,23 @@ class Group {
     if (!values.empty()) file_.check(nc_put_var_longlong(id_, var, values.data()), name_ + "/" + name);
     return dim;
   }
-  // A dimension whose coordinate is text (truck ids, parameter names).
+  // A dimension whose coordinate is text (truck ids, parameter names), as xarray writes a string
+  // array encoded as characters: NC_CHAR over (name, stringN), N the longest label, with
+  // `_Encoding` utf-8, which xarray decodes back to strings. Variable-length strings (NC_STRING)
+  // would do too, but libnetcdf 4.9.0 with HDF5 1.10 then fails to reopen the file ("HDF error")
+  // after another handle on it is closed, which xarray and ArviZ do.
   int string_dim(const std::string& name, const std::vector<std::string>& labels) {
+    std::size_t longest = 1;
+    for (const auto& s : labels) longest = std::max(longest, s.size());
     const int dim = def_dim(name, labels.size());
-    const int var = def_var(name, NC_STRING, {dim});
-    std::vector<const char*> p;
-    for (const auto& s : labels) p.push_back(s.c_str());
-    if (!p.empty()) file_.check(nc_put_var_string(id_, var, p.data()), name_ + "/" + name);
+    const std::string chars_name = "string" + std::to_string(longest);
+    int chars = -1;
+    if (nc_inq_dimid(id_, chars_name.c_str(), &chars) != NC_NOERR) chars = def_dim(chars_name, longest);
+    const int var = def_var(name, NC_CHAR, {dim, chars});
+    text_attribute(var, "_Encoding", "utf-8");
+    std::string block(labels.size() * longest, '\0');
+    for (std::size_t i = 0; i < labels.size(); ++i) block.replace(i * longest, labels[i].size(), labels[i]);
+    if (!labels.empty()) file_.check(nc_put_var_text(id_, var, block.data()), name_ + "/" + name);
     return dim;
   }
   void doubles(const std::string& name, const std::vector<int>& dims, const double* values, const char* units) {

@@ -94,16 +94,20 @@ std::vector<std::string> read_netcdf_strings(const std::string& path, const std:
   int ndims = 0;
   file.check(nc_inq_vartype(g, v, &type), field);
   file.check(nc_inq_varndims(g, v, &ndims), field);
-  if (type != NC_STRING || ndims != 1) throw DataError(path, 0, field, "is not a list of strings");
-  int dim = -1;
-  file.check(nc_inq_vardimid(g, v, &dim), field);
-  std::size_t length = 0;
-  file.check(nc_inq_dimlen(g, dim, &length), field);
-  std::vector<char*> raw(length, nullptr);
-  if (length > 0) file.check(nc_get_var_string(g, v, raw.data()), field);
+  // Characters over (labels, width), NUL-padded, as write_draws_netcdf writes them.
+  if (type != NC_CHAR || ndims != 2) throw DataError(path, 0, field, "is not a list of strings");
+  int dims[2] = {-1, -1};
+  file.check(nc_inq_vardimid(g, v, dims), field);
+  std::size_t count = 0, width = 0;
+  file.check(nc_inq_dimlen(g, dims[0], &count), field);
+  file.check(nc_inq_dimlen(g, dims[1], &width), field);
+  std::string block(count * width, '\0');
+  if (!block.empty()) file.check(nc_get_var_text(g, v, block.data()), field);
   std::vector<std::string> out;
-  for (const char* s : raw) out.emplace_back(s != nullptr ? s : "");
-  if (length > 0) nc_free_string(length, raw.data());
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::string cell = block.substr(i * width, width);
+    out.push_back(cell.substr(0, cell.find('\0')));
+  }
   return out;
 }
 
