@@ -76,6 +76,12 @@ int run_fit(int argc, const char* const argv[]) {
   const std::uint64_t seed = parse_seed(seed_text);
   if (!draws_out.empty()) draws_format(draws_out, "--draws-out");
   if (method != "smc" && method != "mcmc") throw UsageError("--method '" + method + "': must be smc or mcmc");
+  if (method == "mcmc" && !vm["runs"].defaulted()) {
+    throw UsageError("--runs repeats the SMC; the batch MCMC's independent runs are its --chains");
+  }
+  if (method == "smc" && !vm["chains"].defaulted()) {
+    throw UsageError("--chains are the batch MCMC's (--method mcmc); the SMC's independent runs are --runs");
+  }
   if (method == "mcmc" && !fit.checkpoint_dir.empty()) {
     throw UsageError("--checkpoint: checkpoints are the SMC's (a batch MCMC chain is not resumed); drop --method mcmc");
   }

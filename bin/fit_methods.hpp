@@ -41,6 +41,7 @@ struct FitFlags {
   long burn_in = 5000;      // mcmc
   long thin = 10;           // mcmc
   int chains = 4;           // mcmc: independent chains, each of `iterations` sweeps
+  int runs = 1;             // smc: independent runs pooled (fleet/smc_runs.hpp)
   bool verbose = false;     // one line per tempering step
   // fit --checkpoint DIR (io/fit_checkpoint.hpp): resume from DIR's checkpoint if there is one, and
   // write one every checkpoint_every_s seconds of fitting (or every checkpoint_every_trucks trucks).

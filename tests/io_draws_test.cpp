@@ -60,7 +60,7 @@ fleet::PosteriorCloud integer_weight_cloud(const std::string& method, int chains
   c.lateral_max_m = 5.0;
   c.trucks_seen = 4;
   c.log_evidence = method == "smc" ? -12.5 : NAN;
-  c.ess = 10.0;
+  c.weight_ess = 10.0;
   return c;
 }
 

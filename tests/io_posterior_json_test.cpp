@@ -44,7 +44,7 @@ fleet::PosteriorCloud random_cloud(int draws, unsigned seed, bool with_psi) {
   c.lateral_min_m = 0.5;
   c.lateral_max_m = 2.5;
   c.trucks_seen = 5;
-  c.ess = 17.25;
+  c.weight_ess = 17.25;
   c.log_evidence = -123.456789;
   if (with_psi) {
     c.model = "sensor_gain:sensor=11";
@@ -62,7 +62,7 @@ void write(const std::string& path, const fleet::PosteriorCloud& c) {
 bool same(const fleet::PosteriorCloud& a, const fleet::PosteriorCloud& b) {
   return a.theta == b.theta && (a.weights == b.weights).all() && a.speed_mps == b.speed_mps &&
          a.sprung_mass_kg == b.sprung_mass_kg && a.site_fingerprint == b.site_fingerprint && a.model == b.model &&
-         a.psi == b.psi && a.trucks_seen == b.trucks_seen && a.ess == b.ess && a.sensors == b.sensors &&
+         a.psi == b.psi && a.trucks_seen == b.trucks_seen && a.weight_ess == b.weight_ess && (a.min_ess == b.min_ess || (std::isnan(a.min_ess) && std::isnan(b.min_ess))) && a.sensors == b.sensors &&
          a.pooled_sweeps == b.pooled_sweeps;
 }
 }  // namespace

@@ -42,8 +42,9 @@ EqualWeightDraws equal_weight_draws(const PosteriorCloud& cloud) {
   if (cloud.psi.rows() > 0 && cloud.psi.cols() != columns) {
     throw std::invalid_argument("equal_weight_draws(): psi and theta differ in length");
   }
-  // An SMC cloud is one run whatever its pooled sweeps; an MCMC cloud holds `chains` runs.
-  const int chains = cloud.method == "mcmc" ? cloud.chains : 1;
+  // A cloud holds `chains` runs (MCMC chains, or SMC runs of fit --runs); an SMC run's pooled
+  // final sweeps are copies of one run, not chains.
+  const int chains = cloud.chains;
   if (chains < 1 || columns == 0 || columns % chains != 0) {
     throw std::invalid_argument("equal_weight_draws(): " + std::to_string(columns) + " draws do not split into " +
                                 std::to_string(chains) + " chains");

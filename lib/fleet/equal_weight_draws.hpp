@@ -1,9 +1,9 @@
 // Equal-weight draws of a posterior cloud, chain by chain, for tools that expect plain MCMC-style
 // draws (ArviZ, pandas; io/draws_csv.hpp, io/draws_netcdf.hpp).
 //
-// A chain is one independent run: each of an MCMC posterior's `chains` blocks of theta (equal
-// counts, one after the other), or the whole cloud of an SMC run (its pooled final sweeps are
-// copies of one run, not chains). Within a chain of weights w_1..w_P (renormalised to sum to 1)
+// A chain is one independent run: each of a posterior's `chains` blocks of theta (equal counts,
+// one after the other): an MCMC chain, or an SMC run (fit --runs; one run's pooled final sweeps
+// are copies of that run, not chains). Within a chain of weights w_1..w_P (renormalised to sum to 1)
 // the D draws are picked by systematic resampling with the offset fixed at one half:
 //   draw i (i = 0..D-1) is the particle j with W_{j-1} <= (i + 1/2) / D < W_j,  W_j = w_1 + ... + w_j.
 // No random number is drawn, so a posterior file always gives the same draws. A particle of weight

@@ -167,7 +167,7 @@ void write_sample_stats(const NcFile& file, const fleet::PosteriorCloud& cloud, 
   g.int64s("source_index", {chain, draw}, source);
   if (cloud.method == "smc") {
     g.doubles("log_marginal_likelihood", {chain}, &cloud.log_evidence, nullptr);
-    g.doubles("weight_ess", {chain}, &cloud.ess, nullptr);
+    g.doubles("weight_ess", {chain}, &cloud.weight_ess, nullptr);
   }
   if (!cloud.convergence.empty()) {
     std::vector<std::string> names;

@@ -73,7 +73,12 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vect
   }
   j["trucks_seen"] = c.trucks_seen;
   j["particles"] = c.theta.cols();
-  j["ess"] = c.ess;
+  // Two different numbers, each under its own name (files before them held one of them as "ess").
+  if (c.method == "mcmc") {
+    j["min_ess"] = c.min_ess;
+  } else {
+    j["weight_ess"] = c.weight_ess;
+  }
   if (c.pooled_sweeps > 0) j["pooled_sweeps"] = c.pooled_sweeps;  // "particles" then counts every sweep's copy
   write_convergence(c, j);
   j["log_evidence"] = number_or_null(c.log_evidence);
@@ -288,7 +293,14 @@ fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std:
   }
   c.method = get_field<std::string>(j, "method", path, P);
   c.trucks_seen = get_field<long>(j, "trucks_seen", path, P);
-  c.ess = get_field<double>(j, "ess", path, P);
+  // Files written before the two names held the method's number as "ess".
+  const char* ess_name = c.method == "mcmc" ? "min_ess" : "weight_ess";
+  const double ess = get_field<double>(j, j.contains(ess_name) || !j.contains("ess") ? ess_name : "ess", path, P);
+  if (c.method == "mcmc") {
+    c.min_ess = ess;
+  } else {
+    c.weight_ess = ess;
+  }
   c.pooled_sweeps = j.contains("pooled_sweeps") ? get_field<int>(j, "pooled_sweeps", path, P) : 0;
   if (c.pooled_sweeps < 0) throw DataError(path, 0, P + "pooled_sweeps", "must be >= 0");
   read_convergence(j, path, P, c);
