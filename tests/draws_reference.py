@@ -126,6 +126,7 @@ def check_fit(name, posterior_path, nc_path, csv_path, log_path):
     check(y.dims == ("truck", "sensor"), f"{name}: observed if dims {y.dims}")
     check(np.array_equal(y.values, observed), f"{name}: observed if differs from the log")
     check(y["truck"].values.tolist() == log["truck_id"].tolist(), f"{name}: truck ids")
+    check(y["sensor"].values.tolist() == [int(c[3:]) for c in if_columns], f"{name}: sensors numbered as the log's if_ columns")
     check(np.array_equal(opened["constant_data"]["speed_mps"].values, log["speed_mps"]), f"{name}: speeds")
 
     pp = opened["posterior_predictive"]["if"]

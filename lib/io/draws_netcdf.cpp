@@ -187,6 +187,13 @@ void write_sample_stats(const NcFile& file, const fleet::PosteriorCloud& cloud, 
   }
 }
 
+// Sensors numbered as the log's columns if_1..if_M.
+std::vector<long long> sensor_numbers(Eigen::Index sensors) {
+  std::vector<long long> numbers;
+  for (Eigen::Index s = 1; s <= sensors; ++s) numbers.push_back(s);
+  return numbers;
+}
+
 void write_observed(const NcFile& file, const fleet::PosteriorCloud& cloud, const ObservedLog& log,
                     const DrawsFileInfo& info) {
   const std::size_t trucks = log.truck_id.size();
@@ -201,7 +208,7 @@ void write_observed(const NcFile& file, const fleet::PosteriorCloud& cloud, cons
     Group g(file, "observed_data");
     common_attributes(g, cloud, info);
     const std::vector<int> dims = {g.string_dim("truck", log.truck_id),
-                                   g.index_dim("sensor", static_cast<std::size_t>(log.impact_factor.cols()))};
+                                   g.numbered_dim("sensor", sensor_numbers(log.impact_factor.cols()))};
     g.doubles("if", dims, values.data(), "1");
   }
   Group g(file, "constant_data");
@@ -219,7 +226,7 @@ void write_predictive(const NcFile& file, const fleet::PosteriorCloud& cloud, co
   const std::vector<long long> draw_numbers(p.draw_index.begin(), p.draw_index.end());
   const std::vector<int> dims = {g.index_dim("chain", static_cast<std::size_t>(draws.chains)),
                                  g.numbered_dim("draw", draw_numbers), g.string_dim("truck", ids),
-                                 g.index_dim("sensor", static_cast<std::size_t>(p.impact_factor.cols()))};
+                                 g.numbered_dim("sensor", sensor_numbers(p.impact_factor.cols()))};
   std::vector<double> values(static_cast<std::size_t>(p.impact_factor.size()));
   std::size_t i = 0;
   for (Eigen::Index r = 0; r < p.impact_factor.rows(); ++r) {

@@ -7,7 +7,8 @@
 //                       `log_marginal_likelihood` (chain), SMC only; `weight_ess` (chain), SMC only;
 //                       for several MCMC chains their diagnostics by `parameter`: `rhat`, `ess_bulk`,
 //                       `ess_tail`, `mcse_mean`, `mcse_q05`, `mcse_q95`;
-//   observed_data       `if` (truck, sensor), when the fitted log is given;
+//   observed_data       `if` (truck, sensor), when the fitted log is given (sensor numbered 1..M,
+//                       as the log's if_1..if_M; truck by the log's truck ids);
 //   constant_data       `speed_mps`, `sprung_mass_kg` (truck), with the observed data;
 //   posterior_predictive `if` (chain, draw, truck, sensor), when predictive draws are given
 //                       (fleet/posterior_predictive_draws.hpp: a subset, its `draw` coordinate the
