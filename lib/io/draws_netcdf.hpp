@@ -65,8 +65,11 @@ struct NetcdfVariable {
   std::vector<double> values;  // row-major
 };
 std::vector<std::string> netcdf_groups(const std::string& path);
-NetcdfVariable read_netcdf_variable(const std::string& path, const std::string& group, const std::string& name);
-std::vector<std::string> read_netcdf_strings(const std::string& path, const std::string& group, const std::string& name);
-std::string read_netcdf_text_attribute(const std::string& path, const std::string& group, const std::string& name);
+NetcdfVariable read_netcdf_variable(const std::string& path, const std::string& group,
+                                    const std::string& name);
+std::vector<std::string> read_netcdf_strings(const std::string& path, const std::string& group,
+                                             const std::string& name);
+std::string read_netcdf_text_attribute(const std::string& path, const std::string& group,
+                                       const std::string& name);
 
 }  // namespace ssrfleet::io
