@@ -8,8 +8,8 @@
 
 #include "fleet/posterior_cloud.hpp"
 #include "fleet/posterior_predictive_draws.hpp"
-#include "site/site.hpp"
 #include "records/wim_record.hpp"
+#include "site/site.hpp"
 
 namespace ssrfleet::cli {
 

@@ -94,7 +94,7 @@ TEST_CASE("systematic draws at offset 1/2 give each particle of weight n/D exact
   CHECK_THROWS_AS(fleet::systematic_half_offset(Eigen::ArrayXd::Constant(3, NAN), 3), std::invalid_argument);
 }
 
-TEST_CASE("equal-weight draws: an MCMC posterior's chains stay apart, an SMC one is one chain", "[draws]") {
+TEST_CASE("equal-weight draws: MCMC chains and SMC runs stay apart, an SMC run's pooled sweeps are one chain", "[draws]") {
   std::vector<int> counts;
   fleet::PosteriorCloud mcmc = integer_weight_cloud("mcmc", 3, 50, 1, &counts);
   mcmc.weights = Eigen::ArrayXd::Constant(150, 1.0 / 150);
@@ -104,15 +104,23 @@ TEST_CASE("equal-weight draws: an MCMC posterior's chains stay apart, an SMC one
   for (Eigen::Index i = 0; i < 150; ++i) CHECK(m.source[static_cast<std::size_t>(i)] == i);  // each draw once, in order
   CHECK(m.theta == mcmc.theta);
 
-  // An SMC cloud of pooled sweeps: one chain whatever `chains` says, the pool resampled together.
+  // An SMC run's cloud of pooled sweeps: one chain, the pool resampled together.
   fleet::PosteriorCloud smc = integer_weight_cloud("smc", 1, 120, 2, &counts);
   smc.pooled_sweeps = 3;
-  smc.chains = 3;
   const auto s = fleet::equal_weight_draws(smc);
   CHECK(s.chains == 1);
   CHECK(s.draws == 120);
   CHECK(draw_counts(s, 120) == counts);
   for (Eigen::Index i = 0; i < 120; ++i) CHECK(s.theta.col(i) == smc.theta.col(s.source[static_cast<std::size_t>(i)]));
+
+  // Independent SMC runs (fit --runs): each run its own chain, resampled within its block.
+  fleet::PosteriorCloud runs = integer_weight_cloud("smc", 3, 40, 4, &counts);
+  runs.chains = 3;
+  const auto r = fleet::equal_weight_draws(runs);
+  CHECK(r.chains == 3);
+  CHECK(r.draws == 40);
+  CHECK(draw_counts(r, 120) == counts);
+  for (Eigen::Index i = 0; i < 120; ++i) CHECK(r.source[static_cast<std::size_t>(i)] / 40 == i / 40);
 
   // Chains that do not divide the draws are refused.
   mcmc.chains = 4;

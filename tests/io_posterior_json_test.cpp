@@ -354,3 +354,35 @@ TEST_CASE("a posterior file's chain diagnostics read back, a file without them i
   CHECK(plain.chains == 1);
   CHECK(plain.convergence.empty());
 }
+
+TEST_CASE("the weights' ESS and the MCMC's smallest ESS have their own names, and a file with the older ess reads",
+          "[io][posterior]") {
+  test::TempDir dir;
+  const std::string path = dir.file("p.json");
+  fleet::PosteriorCloud smc = random_cloud(40, 5, false);
+  fleet::PosteriorCloud mcmc = random_cloud(40, 6, false);
+  mcmc.method = "mcmc";
+  mcmc.weights.setConstant(1.0 / 40.0);
+  mcmc.weight_ess = 40.0;
+  mcmc.min_ess = 12.5;
+  for (const fleet::PosteriorCloud* c : {&smc, &mcmc}) {
+    const bool is_mcmc = c->method == "mcmc";
+    write(path, *c);
+    nlohmann::json j = nlohmann::json::parse(test::read_text(path));
+    CHECK(j.contains("weight_ess") == !is_mcmc);
+    CHECK(j.contains("min_ess") == is_mcmc);
+    CHECK(!j.contains("ess"));
+    const fleet::PosteriorCloud back = io::read_posterior_file(path);
+    CHECK(back.weight_ess == (is_mcmc ? 40.0 : smc.weight_ess));
+    CHECK((is_mcmc ? back.min_ess == mcmc.min_ess : std::isnan(back.min_ess)));
+    // As files held it before: one "ess", whose meaning was the method's (no checksum: such a file
+    // still reads, and the edit would break one).
+    const char* name = is_mcmc ? "min_ess" : "weight_ess";
+    j["ess"] = j[name];
+    j.erase(name);
+    j.erase("checksum");
+    test::write_text(path, j.dump(1));
+    const fleet::PosteriorCloud old = io::read_posterior_file(path);
+    CHECK((is_mcmc ? old.min_ess == mcmc.min_ess : old.weight_ess == smc.weight_ess));
+  }
+}

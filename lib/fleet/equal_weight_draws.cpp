@@ -8,15 +8,18 @@
 
 namespace ssrfleet::fleet {
 
-std::vector<Eigen::Index> systematic_half_offset(const Eigen::Ref<const Eigen::ArrayXd>& weights, Eigen::Index count) {
+std::vector<Eigen::Index> systematic_half_offset(const Eigen::Ref<const Eigen::ArrayXd>& weights,
+                                                 Eigen::Index count) {
   double total = 0.0;
   for (Eigen::Index j = 0; j < weights.size(); ++j) {
     if (!std::isfinite(weights[j]) || weights[j] < 0.0) {
-      throw std::invalid_argument("systematic_half_offset(): weight " + std::to_string(j) + " is not a finite number >= 0");
+      throw std::invalid_argument("systematic_half_offset(): weight " + std::to_string(j) +
+                                  " is not a finite number >= 0");
     }
     total += weights[j];
   }
-  if (!(total > 0.0) || !std::isfinite(total)) throw std::invalid_argument("systematic_half_offset(): weights sum to 0");
+  if (!(total > 0.0) || !std::isfinite(total))
+    throw std::invalid_argument("systematic_half_offset(): weights sum to 0");
   if (count < 0) throw std::invalid_argument("systematic_half_offset(): negative count");
   std::vector<Eigen::Index> picked;
   picked.reserve(static_cast<std::size_t>(count));
@@ -37,8 +40,10 @@ std::vector<Eigen::Index> systematic_half_offset(const Eigen::Ref<const Eigen::A
 
 EqualWeightDraws equal_weight_draws(const PosteriorCloud& cloud) {
   const Eigen::Index columns = cloud.theta.cols();
-  if (cloud.theta.rows() != kHyperCount) throw std::invalid_argument("equal_weight_draws(): theta needs 7 rows");
-  if (cloud.weights.size() != columns) throw std::invalid_argument("equal_weight_draws(): weights and theta differ in length");
+  if (cloud.theta.rows() != kHyperCount)
+    throw std::invalid_argument("equal_weight_draws(): theta needs 7 rows");
+  if (cloud.weights.size() != columns)
+    throw std::invalid_argument("equal_weight_draws(): weights and theta differ in length");
   if (cloud.psi.rows() > 0 && cloud.psi.cols() != columns) {
     throw std::invalid_argument("equal_weight_draws(): psi and theta differ in length");
   }
@@ -46,8 +51,8 @@ EqualWeightDraws equal_weight_draws(const PosteriorCloud& cloud) {
   // final sweeps are copies of one run, not chains.
   const int chains = cloud.chains;
   if (chains < 1 || columns == 0 || columns % chains != 0) {
-    throw std::invalid_argument("equal_weight_draws(): " + std::to_string(columns) + " draws do not split into " +
-                                std::to_string(chains) + " chains");
+    throw std::invalid_argument("equal_weight_draws(): " + std::to_string(columns) +
+                                " draws do not split into " + std::to_string(chains) + " chains");
   }
   EqualWeightDraws out;
   out.chains = chains;

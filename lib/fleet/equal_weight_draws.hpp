@@ -33,7 +33,8 @@ struct EqualWeightDraws {
 
 // The indices of `count` systematic draws (offset 1/2) from `weights` (>= 0, finite, positive sum;
 // std::invalid_argument otherwise), in increasing order.
-std::vector<Eigen::Index> systematic_half_offset(const Eigen::Ref<const Eigen::ArrayXd>& weights, Eigen::Index count);
+std::vector<Eigen::Index> systematic_half_offset(const Eigen::Ref<const Eigen::ArrayXd>& weights,
+                                                 Eigen::Index count);
 
 // The cloud's equal-weight draws as above. std::invalid_argument for a cloud whose columns do not
 // split into its chains, or whose weights or psi do not match theta's columns.

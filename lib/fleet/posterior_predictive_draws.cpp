@@ -20,7 +20,8 @@ PosteriorPredictiveDraws posterior_predictive_draws(const site::Site& site, cons
                                                     const std::vector<records::WimRecord>& observed,
                                                     Eigen::Index max_draws, Eigen::Index max_trucks,
                                                     std::uint64_t seed) {
-  if (max_draws < 1 || max_trucks < 1) throw std::invalid_argument("posterior_predictive_draws(): cap below 1");
+  if (max_draws < 1 || max_trucks < 1)
+    throw std::invalid_argument("posterior_predictive_draws(): cap below 1");
   PosteriorPredictiveDraws out;
   const Eigen::Index n = std::min(max_draws, draws.draws);
   for (Eigen::Index i = 0; i < n; ++i) {
@@ -71,7 +72,8 @@ PosteriorPredictiveDraws posterior_predictive_draws(const site::Site& site, cons
       drawn.trucks.stiffness_npm[b] = truncated_normal_quantile(uniform_open01(engine), mean, sd, 0.0, inf);
       drawn.trucks.tyre_stiffness_npm[b] =
           truncated_normal_quantile(uniform_open01(engine), th(kKt), th(kSigmaKt), 0.0, inf);
-      drawn.trucks.lateral_m[b] = truncated_normal_quantile(uniform_open01(engine), th(kZ), th(kSigmaZ), zlo, zhi);
+      drawn.trucks.lateral_m[b] =
+          truncated_normal_quantile(uniform_open01(engine), th(kZ), th(kSigmaZ), zlo, zhi);
     }
   }
   Eigen::ArrayXXd clean(site.sensors(), R * T);

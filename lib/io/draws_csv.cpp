@@ -14,7 +14,8 @@ std::vector<std::string> draws_csv_columns(const std::vector<std::string>& psi_n
   return columns;
 }
 
-void write_draws_csv(std::ostream& out, const fleet::EqualWeightDraws& draws, const std::vector<std::string>& psi_names) {
+void write_draws_csv(std::ostream& out, const fleet::EqualWeightDraws& draws,
+                     const std::vector<std::string>& psi_names) {
   if (psi_names.size() != static_cast<std::size_t>(draws.psi.rows())) {
     throw std::invalid_argument("io::write_draws_csv(): " + std::to_string(psi_names.size()) + " names for " +
                                 std::to_string(draws.psi.rows()) + " extension parameters");
@@ -27,7 +28,8 @@ void write_draws_csv(std::ostream& out, const fleet::EqualWeightDraws& draws, co
       const Eigen::Index col = c * draws.draws + d;
       out << c << ',' << d;
       for (int h = 0; h < fleet::kHyperCount; ++h) out << ',' << road::shortest_decimal(draws.theta(h, col));
-      for (Eigen::Index k = 0; k < draws.psi.rows(); ++k) out << ',' << road::shortest_decimal(draws.psi(k, col));
+      for (Eigen::Index k = 0; k < draws.psi.rows(); ++k)
+        out << ',' << road::shortest_decimal(draws.psi(k, col));
       out << '\n';
     }
   }

@@ -19,6 +19,7 @@ namespace ssrfleet::io {
 std::vector<std::string> draws_csv_columns(const std::vector<std::string>& psi_names);
 
 // psi_names: one per row of draws.psi (std::invalid_argument otherwise).
-void write_draws_csv(std::ostream& out, const fleet::EqualWeightDraws& draws, const std::vector<std::string>& psi_names);
+void write_draws_csv(std::ostream& out, const fleet::EqualWeightDraws& draws,
+                     const std::vector<std::string>& psi_names);
 
 }  // namespace ssrfleet::io

@@ -20,7 +20,8 @@ namespace ssrfleet::io {
 namespace {
 
 // The units of the hyperparameters, fleet_model.hpp order (docs/model.md).
-constexpr std::array<const char*, fleet::kHyperCount> kHyperUnits = {"N/m", "N/m", "N/m", "N/m", "m", "m", "1"};
+constexpr std::array<const char*, fleet::kHyperCount> kHyperUnits = {"N/m", "N/m", "N/m", "N/m",
+                                                                     "m",   "m",   "1"};
 
 // One open file, closed on every path out (a failed write must not leave a handle on the
 // temporary that is about to be removed).
@@ -41,7 +42,8 @@ class NcFile {
   }
   int id() const { return id_; }
   void check(int status, const std::string& what) const {
-    if (status != NC_NOERR) throw IoError("writing '" + shown_ + "' failed (" + what + "): " + nc_strerror(status));
+    if (status != NC_NOERR)
+      throw IoError("writing '" + shown_ + "' failed (" + what + "): " + nc_strerror(status));
   }
 
  private:
@@ -89,7 +91,8 @@ class Group {
     if (!labels.empty()) file_.check(nc_put_var_text(id_, var, block.data()), name_ + "/" + name);
     return dim;
   }
-  void doubles(const std::string& name, const std::vector<int>& dims, const double* values, const char* units) {
+  void doubles(const std::string& name, const std::vector<int>& dims, const double* values,
+               const char* units) {
     const int var = def_var(name, NC_DOUBLE, dims);
     if (units != nullptr) text_attribute(var, "units", units);
     file_.check(nc_put_var_double(id_, var, values), name_ + "/" + name);
@@ -99,10 +102,12 @@ class Group {
     file_.check(nc_put_var_longlong(id_, var, values.data()), name_ + "/" + name);
   }
   void text_attribute(int var, const std::string& name, const std::string& value) {
-    file_.check(nc_put_att_text(id_, var, name.c_str(), value.size(), value.c_str()), name_ + " attribute " + name);
+    file_.check(nc_put_att_text(id_, var, name.c_str(), value.size(), value.c_str()),
+                name_ + " attribute " + name);
   }
   void integer_attribute(const std::string& name, long long value) {
-    file_.check(nc_put_att_longlong(id_, NC_GLOBAL, name.c_str(), NC_INT64, 1, &value), name_ + " attribute " + name);
+    file_.check(nc_put_att_longlong(id_, NC_GLOBAL, name.c_str(), NC_INT64, 1, &value),
+                name_ + " attribute " + name);
   }
 
  private:
@@ -141,23 +146,23 @@ std::vector<double> row_of(const Eigen::MatrixXd& m, Eigen::Index r) {
   return v;
 }
 
-void write_posterior(const NcFile& file, const fleet::PosteriorCloud& cloud, const fleet::EqualWeightDraws& draws,
-                     const DrawsFileInfo& info) {
+void write_posterior(const NcFile& file, const fleet::PosteriorCloud& cloud,
+                     const fleet::EqualWeightDraws& draws, const DrawsFileInfo& info) {
   Group g(file, "posterior");
   common_attributes(g, cloud, info);
   const std::vector<int> dims = {g.index_dim("chain", static_cast<std::size_t>(draws.chains)),
                                  g.index_dim("draw", static_cast<std::size_t>(draws.draws))};
   for (int h = 0; h < fleet::kHyperCount; ++h) {
-    g.doubles(std::string(fleet::kHyperNames[static_cast<std::size_t>(h)]), dims, row_of(draws.theta, h).data(),
-              kHyperUnits[static_cast<std::size_t>(h)]);
+    g.doubles(std::string(fleet::kHyperNames[static_cast<std::size_t>(h)]), dims,
+              row_of(draws.theta, h).data(), kHyperUnits[static_cast<std::size_t>(h)]);
   }
   for (Eigen::Index k = 0; k < draws.psi.rows(); ++k) {
     g.doubles(cloud.psi_names[static_cast<std::size_t>(k)], dims, row_of(draws.psi, k).data(), nullptr);
   }
 }
 
-void write_sample_stats(const NcFile& file, const fleet::PosteriorCloud& cloud, const fleet::EqualWeightDraws& draws,
-                        const DrawsFileInfo& info) {
+void write_sample_stats(const NcFile& file, const fleet::PosteriorCloud& cloud,
+                        const fleet::EqualWeightDraws& draws, const DrawsFileInfo& info) {
   Group g(file, "sample_stats");
   common_attributes(g, cloud, info);
   if (cloud.pooled_sweeps > 0) g.integer_attribute("pooled_sweeps", cloud.pooled_sweeps);
@@ -166,8 +171,11 @@ void write_sample_stats(const NcFile& file, const fleet::PosteriorCloud& cloud, 
   std::vector<long long> source(draws.source.begin(), draws.source.end());
   g.int64s("source_index", {chain, draw}, source);
   if (cloud.method == "smc") {
-    g.doubles("log_marginal_likelihood", {chain}, &cloud.log_evidence, nullptr);
-    g.doubles("weight_ess", {chain}, &cloud.weight_ess, nullptr);
+    // One run: its own values, by chain. Several runs (fit --runs): the pooled posterior's (the log
+    // of the runs' mean evidence, the ESS of all their weights), as scalars.
+    const std::vector<int> by_chain = draws.chains == 1 ? std::vector<int>{chain} : std::vector<int>{};
+    g.doubles("log_marginal_likelihood", by_chain, &cloud.log_evidence, nullptr);
+    g.doubles("weight_ess", by_chain, &cloud.weight_ess, nullptr);
   }
   if (!cloud.convergence.empty()) {
     std::vector<std::string> names;
@@ -184,7 +192,17 @@ void write_sample_stats(const NcFile& file, const fleet::PosteriorCloud& cloud, 
     g.doubles("mcse_mean", {parameter}, column(&fleet::ParameterConvergence::mcse_mean).data(), nullptr);
     g.doubles("mcse_q05", {parameter}, column(&fleet::ParameterConvergence::mcse_q05).data(), nullptr);
     g.doubles("mcse_q95", {parameter}, column(&fleet::ParameterConvergence::mcse_q95).data(), nullptr);
+    if (cloud.method == "smc") {
+      g.doubles("ess_equivalent", {parameter}, column(&fleet::ParameterConvergence::ess_equivalent).data(), nullptr);
+    }
   }
+}
+
+// Sensors numbered as the log's columns if_1..if_M.
+std::vector<long long> sensor_numbers(Eigen::Index sensors) {
+  std::vector<long long> numbers;
+  for (Eigen::Index s = 1; s <= sensors; ++s) numbers.push_back(s);
+  return numbers;
 }
 
 void write_observed(const NcFile& file, const fleet::PosteriorCloud& cloud, const ObservedLog& log,
@@ -201,7 +219,7 @@ void write_observed(const NcFile& file, const fleet::PosteriorCloud& cloud, cons
     Group g(file, "observed_data");
     common_attributes(g, cloud, info);
     const std::vector<int> dims = {g.string_dim("truck", log.truck_id),
-                                   g.index_dim("sensor", static_cast<std::size_t>(log.impact_factor.cols()))};
+                                   g.numbered_dim("sensor", sensor_numbers(log.impact_factor.cols()))};
     g.doubles("if", dims, values.data(), "1");
   }
   Group g(file, "constant_data");
@@ -211,15 +229,16 @@ void write_observed(const NcFile& file, const fleet::PosteriorCloud& cloud, cons
   g.doubles("sprung_mass_kg", {truck}, log.sprung_mass_kg.data(), "kg");
 }
 
-void write_predictive(const NcFile& file, const fleet::PosteriorCloud& cloud, const fleet::EqualWeightDraws& draws,
-                      const ObservedLog& log, const fleet::PosteriorPredictiveDraws& p, const DrawsFileInfo& info) {
+void write_predictive(const NcFile& file, const fleet::PosteriorCloud& cloud,
+                      const fleet::EqualWeightDraws& draws, const ObservedLog& log,
+                      const fleet::PosteriorPredictiveDraws& p, const DrawsFileInfo& info) {
   Group g(file, "posterior_predictive");
   common_attributes(g, cloud, info);
   const std::vector<std::string> ids(log.truck_id.begin(), log.truck_id.begin() + p.trucks);
   const std::vector<long long> draw_numbers(p.draw_index.begin(), p.draw_index.end());
   const std::vector<int> dims = {g.index_dim("chain", static_cast<std::size_t>(draws.chains)),
                                  g.numbered_dim("draw", draw_numbers), g.string_dim("truck", ids),
-                                 g.index_dim("sensor", static_cast<std::size_t>(p.impact_factor.cols()))};
+                                 g.numbered_dim("sensor", sensor_numbers(p.impact_factor.cols()))};
   std::vector<double> values(static_cast<std::size_t>(p.impact_factor.size()));
   std::size_t i = 0;
   for (Eigen::Index r = 0; r < p.impact_factor.rows(); ++r) {
@@ -228,14 +247,17 @@ void write_predictive(const NcFile& file, const fleet::PosteriorCloud& cloud, co
   g.doubles("if", dims, values.data(), "1");
 }
 
-void check_sizes(const fleet::PosteriorCloud& cloud, const fleet::EqualWeightDraws& draws, const ObservedLog* observed,
-                 const fleet::PosteriorPredictiveDraws* predictive) {
-  const auto fail = [](const std::string& what) { throw std::invalid_argument("io::write_draws_netcdf(): " + what); };
+void check_sizes(const fleet::PosteriorCloud& cloud, const fleet::EqualWeightDraws& draws,
+                 const ObservedLog* observed, const fleet::PosteriorPredictiveDraws* predictive) {
+  const auto fail = [](const std::string& what) {
+    throw std::invalid_argument("io::write_draws_netcdf(): " + what);
+  };
   if (draws.theta.rows() != fleet::kHyperCount || draws.theta.cols() != draws.chains * draws.draws ||
       static_cast<Eigen::Index>(draws.source.size()) != draws.theta.cols()) {
     fail("draws do not match chains x draws");
   }
-  if (static_cast<Eigen::Index>(cloud.psi_names.size()) != draws.psi.rows()) fail("psi names do not match the draws");
+  if (static_cast<Eigen::Index>(cloud.psi_names.size()) != draws.psi.rows())
+    fail("psi names do not match the draws");
   if (observed != nullptr) {
     const auto n = static_cast<Eigen::Index>(observed->truck_id.size());
     if (observed->impact_factor.rows() != n || static_cast<Eigen::Index>(observed->speed_mps.size()) != n ||
@@ -264,8 +286,9 @@ std::string iso_utc_now() {
   std::tm utc{};
   gmtime_r(&t, &utc);
   char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%04d-%02d-%02dT%02d:%02d:%02d.%06lld", utc.tm_year + 1900, utc.tm_mon + 1,
-                utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, static_cast<long long>(micro));
+  std::snprintf(buffer, sizeof buffer, "%04d-%02d-%02dT%02d:%02d:%02d.%06lld", utc.tm_year + 1900,
+                utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec,
+                static_cast<long long>(micro));
   return buffer;
 }
 
@@ -288,8 +311,8 @@ ObservedLog observed_log_of(const std::vector<records::WimRecord>& records) {
 }
 
 void write_draws_netcdf(const std::string& path, const fleet::PosteriorCloud& cloud,
-                        const fleet::EqualWeightDraws& draws, const DrawsFileInfo& info, const ObservedLog* observed,
-                        const fleet::PosteriorPredictiveDraws* predictive) {
+                        const fleet::EqualWeightDraws& draws, const DrawsFileInfo& info,
+                        const ObservedLog* observed, const fleet::PosteriorPredictiveDraws* predictive) {
   check_sizes(cloud, draws, observed, predictive);
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   try {
@@ -299,7 +322,8 @@ void write_draws_netcdf(const std::string& path, const fleet::PosteriorCloud& cl
     if (observed != nullptr) write_observed(file, cloud, *observed, info);
     if (predictive != nullptr) write_predictive(file, cloud, draws, *observed, *predictive, info);
     file.close();
-    check_write_fault(path);  // a test's full disk strikes here: the temporary exists, the target is untouched
+    check_write_fault(
+        path);  // a test's full disk strikes here: the temporary exists, the target is untouched
     if (std::rename(tmp.c_str(), path.c_str()) != 0) {
       throw IoError("cannot rename '" + tmp + "' to '" + path + "'");
     }

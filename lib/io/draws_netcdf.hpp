@@ -7,7 +7,8 @@
 //                       `log_marginal_likelihood` (chain), SMC only; `weight_ess` (chain), SMC only;
 //                       for several MCMC chains their diagnostics by `parameter`: `rhat`, `ess_bulk`,
 //                       `ess_tail`, `mcse_mean`, `mcse_q05`, `mcse_q95`;
-//   observed_data       `if` (truck, sensor), when the fitted log is given;
+//   observed_data       `if` (truck, sensor), when the fitted log is given (sensor numbered 1..M,
+//                       as the log's if_1..if_M; truck by the log's truck ids);
 //   constant_data       `speed_mps`, `sprung_mass_kg` (truck), with the observed data;
 //   posterior_predictive `if` (chain, draw, truck, sensor), when predictive draws are given
 //                       (fleet/posterior_predictive_draws.hpp: a subset, its `draw` coordinate the
@@ -64,8 +65,11 @@ struct NetcdfVariable {
   std::vector<double> values;  // row-major
 };
 std::vector<std::string> netcdf_groups(const std::string& path);
-NetcdfVariable read_netcdf_variable(const std::string& path, const std::string& group, const std::string& name);
-std::vector<std::string> read_netcdf_strings(const std::string& path, const std::string& group, const std::string& name);
-std::string read_netcdf_text_attribute(const std::string& path, const std::string& group, const std::string& name);
+NetcdfVariable read_netcdf_variable(const std::string& path, const std::string& group,
+                                    const std::string& name);
+std::vector<std::string> read_netcdf_strings(const std::string& path, const std::string& group,
+                                             const std::string& name);
+std::string read_netcdf_text_attribute(const std::string& path, const std::string& group,
+                                       const std::string& name);
 
 }  // namespace ssrfleet::io

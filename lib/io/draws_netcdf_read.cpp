@@ -15,7 +15,8 @@ class NcReadFile {
   explicit NcReadFile(const std::string& path) : path_(path) {
     if (!std::filesystem::exists(path)) throw MissingInputError("cannot open '" + path + "': no such file");
     const int status = nc_open(path.c_str(), NC_NOWRITE, &id_);
-    if (status != NC_NOERR) throw DataError(path, 0, "format", std::string("not a netCDF file: ") + nc_strerror(status));
+    if (status != NC_NOERR)
+      throw DataError(path, 0, "format", std::string("not a netCDF file: ") + nc_strerror(status));
   }
   ~NcReadFile() { nc_close(id_); }
   NcReadFile(const NcReadFile&) = delete;
@@ -57,7 +58,8 @@ std::vector<std::string> netcdf_groups(const std::string& path) {
   return names;
 }
 
-NetcdfVariable read_netcdf_variable(const std::string& path, const std::string& group, const std::string& name) {
+NetcdfVariable read_netcdf_variable(const std::string& path, const std::string& group,
+                                    const std::string& name) {
   NcReadFile file(path);
   const std::string field = group + "/" + name;
   const int g = file.group(group);
@@ -111,7 +113,8 @@ std::vector<std::string> read_netcdf_strings(const std::string& path, const std:
   return out;
 }
 
-std::string read_netcdf_text_attribute(const std::string& path, const std::string& group, const std::string& name) {
+std::string read_netcdf_text_attribute(const std::string& path, const std::string& group,
+                                       const std::string& name) {
   NcReadFile file(path);
   const std::string field = group + "/@" + name;
   const int g = group.empty() ? file.id() : file.group(group);
