@@ -434,7 +434,7 @@ int main(int argc, char** argv) {
               smc_options.sampler.schedule.max_sweeps, newest_acceptance);
   std::printf("  %-38s %12.2f s   (%.2f cores busy on average; load average %.2f before, %.2f after)\n",
               "process CPU time during the replay", smc_cpu_s, cores_used, load_before, load_after_smc);
-  std::printf("  %-38s %12.1f   (log evidence %.2f)\n", "final ESS", cloud.ess, cloud.log_evidence);
+  std::printf("  %-38s %12.1f   (log evidence %.2f)\n", "final ESS", cloud.weight_ess, cloud.log_evidence);
   std::printf("  %-38s %12.3f s   (%d sweeps, %lld passes, acceptance of the last %.2f)\n", "final rejuvenation sweeps",
               final_s, final_sweeps, final_passes, final_acceptance);
   std::printf("integrator calibration: Site::impact_factors, %d trucks per call, 1 thread, %d reps (%d before, %d "
@@ -583,7 +583,7 @@ int main(int argc, char** argv) {
                 {"tempering_steps", tempering_steps},
                 {"mh_sweeps", mh_sweeps},
                 {"resamplings", resamplings},
-                {"final_ess", cloud.ess},
+                {"final_ess", cloud.weight_ess},
                 {"final_sweeps", {{"sweeps", final_sweeps}, {"wall_s", final_s}, {"integrator_passes", final_passes},
                                   {"acceptance_last_sweep", final_acceptance}}},
                 {"log_evidence", cloud.log_evidence}};
@@ -696,7 +696,7 @@ int main(int argc, char** argv) {
        << "| SMC tempering steps whose MH sweeps hit max_steps (" << smc_options.sampler.schedule.max_sweeps << ") | "
        << fmt("%.1f", 100.0 * capped_steps / std::max(1, tempering_steps)) << " % |\n"
        << "| SMC newest-truck MH acceptance (mean over steps) | " << fmt("%.2f", newest_acceptance) << " |\n"
-       << "| SMC final ESS | " << fmt("%.0f", cloud.ess) << " |\n"
+       << "| SMC final ESS | " << fmt("%.0f", cloud.weight_ess) << " |\n"
        << "| SMC final rejuvenation: sweeps / wall / integrator passes | " << final_sweeps << " / " << fmt("%.2f", final_s)
        << " s / " << final_passes << " |\n"
        << "| SMC process CPU time / cores busy on average | " << fmt("%.2f", smc_cpu_s) << " s / "

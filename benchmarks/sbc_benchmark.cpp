@@ -107,7 +107,7 @@ Replication run_replication(const site::Site& site, const Settings& s, int r) {
   const auto t0 = std::chrono::steady_clock::now();
   try {
     const Fit fit = fit_log(site, s.prior, log.records, static_cast<std::uint64_t>(r));
-    out.cloud_ess = fit.cloud.ess;
+    out.cloud_ess = fit.cloud.weight_ess;
     out.final_acceptance = fit.acceptance;
     summarise(fit.cloud, &out.post_mean, &out.post_sd);
     smc::Rng rng = smc::RngFactory(kDrawStreams).stream(static_cast<std::uint64_t>(r));

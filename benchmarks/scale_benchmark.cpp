@@ -91,7 +91,7 @@ nlohmann::json posterior_json(const fleet::MarginalSmc& smc) {
     const double var = (c.weights * (x - mean).square()).sum();
     j[std::string(fleet::kHyperNames[h])] = {{"mean", mean}, {"sd", std::sqrt(var)}};
   }
-  j["ess"] = c.ess;
+  j["weight_ess"] = c.weight_ess;
   j["log_evidence"] = c.log_evidence;
   return j;
 }

@@ -9,6 +9,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "draws_output.hpp"
 #include "fit_methods.hpp"
 #include "fit_sites.hpp"
 #include "process_ranks.hpp"
@@ -24,7 +25,7 @@ int run_fit(int argc, const char* const argv[]) {
   FitFlags fit;
   bool quiet = false, fhwa = false, calibrate = false;
   int calibration_rounds = discrepancy::CalibrationOptions{}.max_rounds;
-  std::string calibrated_manifest;
+  std::string calibrated_manifest, draws_out;
   SiteFlags site_flags;
   po::options_description desc("fit options");
   desc.add_options()
@@ -45,6 +46,9 @@ int run_fit(int argc, const char* const argv[]) {
        "absolute), for stream --sites")
       ("road", po::value(&road)->value_name("ROAD")->default_value(road), kRoadHelp)
       ("out,o", po::value(&out)->value_name("FILE")->default_value(out), "posterior file to write (JSON; '-' = standard output)")
+      ("draws-out", po::value(&draws_out)->value_name("FILE"),
+       "also write the posterior's equal-weight draws: FILE.csv, or FILE.nc (NetCDF4 in ArviZ's layout, with the log "
+       "as observed_data); ssrfleet draws --help says how")
       ("method", po::value(&method)->value_name("METHOD")->default_value(method),
        "smc (sequential, default) or mcmc (the paper's batch baseline)")
       ("seed", po::value(&seed_text)->value_name("SEED")->default_value(seed_text), "random seed (a whole number)")
@@ -70,7 +74,14 @@ int run_fit(int argc, const char* const argv[]) {
   fit.max_sweeps_given = !vm["max-sweeps"].defaulted();
   fit.core_given = !vm["core"].defaulted();
   const std::uint64_t seed = parse_seed(seed_text);
+  if (!draws_out.empty()) draws_format(draws_out, "--draws-out");
   if (method != "smc" && method != "mcmc") throw UsageError("--method '" + method + "': must be smc or mcmc");
+  if (method == "mcmc" && !vm["runs"].defaulted()) {
+    throw UsageError("--runs repeats the SMC; the batch MCMC's independent runs are its --chains");
+  }
+  if (method == "smc" && !vm["chains"].defaulted()) {
+    throw UsageError("--chains are the batch MCMC's (--method mcmc); the SMC's independent runs are --runs");
+  }
   if (method == "mcmc" && !fit.checkpoint_dir.empty()) {
     throw UsageError("--checkpoint: checkpoints are the SMC's (a batch MCMC chain is not resumed); drop --method mcmc");
   }
@@ -89,6 +100,10 @@ int run_fit(int argc, const char* const argv[]) {
   if (!manifest_path.empty()) {
     refuse_beside_sites(vm, {"log", "road", "sensors"});
     if (site_name.empty()) {
+      if (!draws_out.empty()) {
+        throw UsageError("--draws-out: a fit of a manifest's sites together writes its posterior only; then run "
+                         "ssrfleet draws POSTERIOR --out FILE (or fit one site: --site NAME)");
+      }
       if (calibration_rounds < 1) throw UsageError("--calibration-rounds must be at least 1");
       fit_manifest_sites({manifest_path, out, method, seed, quiet, calibrate, calibration_rounds, calibrated_manifest}, fit,
                          site_flags, limits);
@@ -117,9 +132,13 @@ int run_fit(int argc, const char* const argv[]) {
     std::cerr << "ssrfleet fit: " << records.size() << " trucks from " << log_path << ", road " << site.surface().name
               << ", method " << method << ", model " << model.text << ", seed " << seed << "\n";
   }
+  if (!draws_out.empty() && fleet::split_by_class(records).size() > 1) {
+    throw UsageError("--draws-out: the log has several vehicle classes, each its own posterior; fit, then write each "
+                     "class's draws with ssrfleet draws POSTERIOR --class LABEL --out FILE");
+  }
   const auto start = std::chrono::steady_clock::now();
   std::ostream* progress = quiet ? nullptr : &std::cerr;
-  fit_classes_to_file(records, seed, out, quiet ? nullptr : &std::cerr,
+  const fleet::ClassPosteriors classes = fit_classes_to_file(records, seed, out, quiet ? nullptr : &std::cerr,
                       [&](const std::vector<records::WimRecord>& class_records, std::uint64_t class_seed) {
                         fleet::PosteriorCloud cloud =
                             method == "smc"
@@ -131,9 +150,18 @@ int run_fit(int argc, const char* const argv[]) {
                         }
                         return cloud;
                       });
+  // Rank 0 writes for every rank (the ranks hold the same posterior).
+  if (!draws_out.empty() && process_ranks().rank() == 0) {
+    DrawsExtras extras;
+    extras.observed = &records;
+    extras.site = &site;
+    extras.seed = seed;
+    write_draws(draws_out, classes.front().cloud, extras);
+  }
   if (!quiet) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::cerr << "ssrfleet fit: done in " << std::fixed << std::setprecision(1) << s << " s -> " << out << "\n";
+    std::cerr << "ssrfleet fit: done in " << std::fixed << std::setprecision(1) << s << " s -> " << out
+              << (draws_out.empty() ? "" : ", draws -> " + draws_out) << "\n";
   }
   return 0;
 }

@@ -24,6 +24,8 @@ const std::vector<CommandInfo>& command_table() {
         {"damage", run_damage,
          "damage along the road: fourth-power amplification, DLC, hot spots, ESAL per million trucks"},
         {"weigh", run_weigh, "SSR-corrected static wheel loads from a log of raw tyre forces"},
+        {"draws", run_draws,
+         "write a posterior's equal-weight draws as CSV or NetCDF4 in ArviZ's layout, for numpy, pandas, xarray"},
         {"sites", run_sites,
          "check a site manifest, list its sites, collect their posteriors into one table"},
         {"reproduce", run_reproduce,

@@ -15,5 +15,6 @@ int run_damage(int argc, const char* const argv[]);
 int run_weigh(int argc, const char* const argv[]);
 int run_sites(int argc, const char* const argv[]);
 int run_effects(int argc, const char* const argv[]);
+int run_draws(int argc, const char* const argv[]);
 
 }  // namespace ssrfleet::cli

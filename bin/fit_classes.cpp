@@ -9,7 +9,7 @@
 
 namespace ssrfleet::cli {
 
-void fit_classes_to_file(const std::vector<records::WimRecord>& records, std::uint64_t seed, const std::string& out,
+fleet::ClassPosteriors fit_classes_to_file(const std::vector<records::WimRecord>& records, std::uint64_t seed, const std::string& out,
                          std::ostream* progress,
                          const std::function<fleet::PosteriorCloud(const std::vector<records::WimRecord>&, std::uint64_t)>& fit_class) {
   fleet::ClassPosteriors classes;
@@ -24,8 +24,9 @@ void fit_classes_to_file(const std::vector<records::WimRecord>& records, std::ui
     psi.push_back(fleet::summarise_psi(cloud));
     classes.push_back({label, std::move(cloud)});
   }
-  if (process_ranks().rank() != 0) return;  // rank 0 writes for every rank (the ranks hold the same posterior)
+  if (process_ranks().rank() != 0) return classes;  // rank 0 writes for every rank (the ranks hold the same posterior)
   write_output(out, [&](std::ostream& os) { os << io::posterior_file_text(io::posterior_classes_to_json(classes, hyper, psi)); });
+  return classes;
 }
 
 }  // namespace ssrfleet::cli

@@ -14,6 +14,7 @@
 
 #include "fleet/online_fit.hpp"
 #include "fleet/posterior_cloud.hpp"
+#include "fleet/vehicle_classes.hpp"
 #include "io/wim_log.hpp"
 #include "site/site.hpp"
 
@@ -40,6 +41,7 @@ struct FitFlags {
   long burn_in = 5000;      // mcmc
   long thin = 10;           // mcmc
   int chains = 4;           // mcmc: independent chains, each of `iterations` sweeps
+  int runs = 1;             // smc: independent runs pooled (fleet/smc_runs.hpp)
   bool verbose = false;     // one line per tempering step
   // fit --checkpoint DIR (io/fit_checkpoint.hpp): resume from DIR's checkpoint if there is one, and
   // write one every checkpoint_every_s seconds of fitting (or every checkpoint_every_trucks trucks).
@@ -68,8 +70,9 @@ fleet::PosteriorCloud fit_mcmc(const site::Site& site, const std::vector<records
 
 // One independent posterior per vehicle class of `records` (an unlabelled log is one class with the
 // empty label and the seed itself), each fitted by fit_class(class records, fleet::class_seed(seed,
-// label)), written as one posterior file to `out` ('-' = stdout).
-void fit_classes_to_file(const std::vector<records::WimRecord>& records, std::uint64_t seed, const std::string& out,
+// label)), written as one posterior file to `out` ('-' = stdout). Returns the classes' posteriors
+// (sorted by label).
+fleet::ClassPosteriors fit_classes_to_file(const std::vector<records::WimRecord>& records, std::uint64_t seed, const std::string& out,
                          std::ostream* progress,
                          const std::function<fleet::PosteriorCloud(const std::vector<records::WimRecord>&, std::uint64_t)>& fit_class);
 

@@ -34,6 +34,10 @@ fleet::PosteriorCloud calibrate_sensors(const JointFitRequest& request, const Fi
     throw UsageError("--calibrate runs on one process: its latent draws need every truck's table (drop mpirun, or "
                      "fit the gains first and give them to the ranks' fit in the manifest's calibration)");
   }
+  if (fit.runs > 1) {
+    throw UsageError("--runs with --calibrate: the EM refits the corrected data round after round, one run each; "
+                     "check the final posterior's Monte Carlo error with fit --runs on the calibrated manifest");
+  }
   if (!fit.checkpoint_dir.empty()) {
     throw UsageError("--checkpoint with --calibrate: each round refits corrected data, which a checkpoint of the "
                      "first round does not hold; drop one of them");

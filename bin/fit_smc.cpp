@@ -13,6 +13,7 @@
 #include "fleet/online_fit.hpp"
 #include "fleet/joint_sites.hpp"
 #include "fleet/replay.hpp"
+#include "fleet/smc_runs.hpp"
 #include "io/fit_checkpoint.hpp"
 #include "util/errors.hpp"
 
@@ -54,6 +55,10 @@ void FitFlags::add_to(po::options_description& desc) {
        "seconds of fitting between checkpoints (one is also written after the last truck)")
       ("checkpoint-every-trucks", po::value(&checkpoint_every_trucks)->value_name("N")->default_value(checkpoint_every_trucks),
        "also a checkpoint every this many trucks (0: by time only)")
+      ("runs", po::value(&runs)->value_name("R")->default_value(runs),
+       "independent SMC runs (run 1 with --seed itself, the others from seeds derived from it), one after the "
+       "other, pooled into one posterior; their R-hat, equivalent ESS and the MCSE of each mean and 5 %/95 % "
+       "quantile from their spread are printed and kept in the posterior file (R from 2 to 64; 1: one run)")
       ("verbose", po::bool_switch(&verbose),
        "print the move schedule, then every tempering step (phi, ESS, each scheduled move's runs and acceptance, jump "
        "per block)");
@@ -252,15 +257,50 @@ std::unique_ptr<fleet::OnlineFit> fit_smc_on(const std::vector<const site::Site*
 }
 }  // namespace
 
+namespace {
+// The runs' diagnostics, one line a parameter (fleet/smc_runs.hpp). R-hat above 1.01 says the runs
+// disagree by more than a tenth of a posterior sd or so: more particles or final sweeps are needed.
+void print_run_convergence(std::ostream& out, const fleet::PosteriorCloud& cloud) {
+  out << "fit (smc): " << cloud.chains << " runs; R-hat, equivalent ESS, MCSE of mean / q05 / q95:\n";
+  bool unmixed = false;
+  for (const auto& p : cloud.convergence) {
+    out << "  " << std::left << std::setw(10) << p.name << std::right << std::defaultfloat << std::setprecision(4)
+        << " R-hat " << p.rhat << "  ESS " << std::fixed << std::setprecision(0) << p.ess_equivalent << "  MCSE "
+        << std::defaultfloat << std::setprecision(3) << p.mcse_mean << " / " << p.mcse_q05 << " / " << p.mcse_q95
+        << "\n";
+    unmixed = unmixed || p.rhat > 1.01;
+  }
+  if (unmixed) {
+    out << "fit (smc): warning: R-hat above 1.01: the runs disagree; give more --particles or --final-sweeps\n";
+  }
+}
+
+// `runs` independent fits (fleet::run_seed), pooled.
+fleet::PosteriorCloud fit_smc_runs(const std::vector<const site::Site*>& sites,
+                                   const std::vector<records::WimRecord>& records, const FitFlags& flags,
+                                   std::uint64_t seed, std::ostream* progress, const fleet::ModelExtension* extension) {
+  if (flags.runs < 1 || flags.runs > 64) throw UsageError("--runs must be from 1 to 64, not " + std::to_string(flags.runs));
+  std::vector<fleet::PosteriorCloud> runs;
+  for (int r = 0; r < flags.runs; ++r) {
+    const std::uint64_t run_seed = fleet::run_seed(seed, r);
+    if (progress && flags.runs > 1) *progress << "fit: run " << (r + 1) << "/" << flags.runs << ", seed " << run_seed << "\n";
+    runs.push_back(fit_smc_on(sites, records, flags, run_seed, progress, extension)->cloud());
+  }
+  fleet::PosteriorCloud cloud = fleet::pool_runs(runs);
+  if (progress && flags.runs > 1) print_run_convergence(*progress, cloud);
+  return cloud;
+}
+}  // namespace
+
 fleet::PosteriorCloud fit_smc(const site::Site& site, const std::vector<records::WimRecord>& records,
                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress,
                               const fleet::ModelExtension* extension) {
-  return fit_smc_on({&site}, records, flags, seed, progress, extension)->cloud();
+  return fit_smc_runs({&site}, records, flags, seed, progress, extension);
 }
 
 fleet::PosteriorCloud fit_smc(const std::vector<const site::Site*>& sites, const std::vector<records::WimRecord>& records,
                               const FitFlags& flags, std::uint64_t seed, std::ostream* progress) {
-  return fit_smc_on(sites, records, flags, seed, progress, nullptr)->cloud();
+  return fit_smc_runs(sites, records, flags, seed, progress, nullptr);
 }
 
 std::unique_ptr<fleet::OnlineFit> fit_smc_online(const std::vector<const site::Site*>& sites,

@@ -10,14 +10,16 @@
 #                                    it links or includes, gnuplot for the plots
 set -euo pipefail
 # The ssrfleet target: Eigen, Boost (headers, program_options), nlohmann-json, SQLite (the stream's
-# history); gnuplot renders reproduce's plots (without it the scripts are written, not run).
+# history), NetCDF (the draws file, NetCDF4 in ArviZ's layout); gnuplot renders reproduce's plots
+# (without it the scripts are written, not run).
 main_packages=(build-essential cmake libeigen3-dev libboost-dev libboost-program-options-dev
-               nlohmann-json3-dev libsqlite3-dev gnuplot-nox)
+               nlohmann-json3-dev libsqlite3-dev libnetcdf-dev gnuplot-nox)
 # Beyond the main job: git (CI clones the checkout), Catch2 (tests), sqlite3 (the tests query the
-# history), python3-numpy (the independent check of the convergence diagnostics), GNU parallel
+# history), python3-numpy (the independent check of the convergence diagnostics), python3-xarray
+# and python3-netcdf4 (the draws files opened as a notebook would), GNU parallel
 # (scripts/fit-sites.sh), Open MPI (ssrfleet-mpi and its test), help2man (the man pages).
-full_packages=("${main_packages[@]}" git catch2 sqlite3 python3-numpy parallel libopenmpi-dev openmpi-bin
-               help2man)
+full_packages=("${main_packages[@]}" git catch2 sqlite3 python3-numpy python3-xarray python3-netcdf4 parallel
+               libopenmpi-dev openmpi-bin help2man)
 case "${1:-}" in
   --main) packages=("${main_packages[@]}") ;;
   "") packages=("${full_packages[@]}") ;;

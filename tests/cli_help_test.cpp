@@ -151,8 +151,8 @@ std::vector<std::string> listed_commands(const std::string& general_help) {
   return names;
 }
 
-const std::vector<std::string> kCommands = {"damage", "diagnose", "effects", "fit",    "predict", "reproduce",
-                                            "road",   "simulate", "sites",   "stream", "weigh"};
+const std::vector<std::string> kCommands = {"damage", "diagnose", "draws",  "effects", "fit",    "predict",
+                                            "reproduce", "road", "simulate", "sites", "stream", "weigh"};
 
 // The build tree: the ssrfleet binary sits at its top.
 std::filesystem::path build_dir() { return std::filesystem::path(SSRFLEET_BINARY).parent_path(); }

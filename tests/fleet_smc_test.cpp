@@ -80,7 +80,7 @@ TEST_CASE("the SMC on 20 simulated trucks brackets the true fleet hyperparameter
     CHECK(summary[h].q975 >= kTruth[h]);
   }
   CHECK(std::isfinite(cloud.log_evidence));
-  CHECK(cloud.ess > 0.3 * 512);
+  CHECK(cloud.weight_ess > 0.3 * 512);
   CHECK(smc.target().integrator_passes() > 0);
 }
 

@@ -44,7 +44,7 @@ fleet::PosteriorCloud random_cloud(int draws, unsigned seed, bool with_psi) {
   c.lateral_min_m = 0.5;
   c.lateral_max_m = 2.5;
   c.trucks_seen = 5;
-  c.ess = 17.25;
+  c.weight_ess = 17.25;
   c.log_evidence = -123.456789;
   if (with_psi) {
     c.model = "sensor_gain:sensor=11";
@@ -62,7 +62,7 @@ void write(const std::string& path, const fleet::PosteriorCloud& c) {
 bool same(const fleet::PosteriorCloud& a, const fleet::PosteriorCloud& b) {
   return a.theta == b.theta && (a.weights == b.weights).all() && a.speed_mps == b.speed_mps &&
          a.sprung_mass_kg == b.sprung_mass_kg && a.site_fingerprint == b.site_fingerprint && a.model == b.model &&
-         a.psi == b.psi && a.trucks_seen == b.trucks_seen && a.ess == b.ess && a.sensors == b.sensors &&
+         a.psi == b.psi && a.trucks_seen == b.trucks_seen && a.weight_ess == b.weight_ess && (a.min_ess == b.min_ess || (std::isnan(a.min_ess) && std::isnan(b.min_ess))) && a.sensors == b.sensors &&
          a.pooled_sweeps == b.pooled_sweeps;
 }
 }  // namespace
@@ -353,4 +353,36 @@ TEST_CASE("a posterior file's chain diagnostics read back, a file without them i
   const auto plain = io::read_posterior_file(path);
   CHECK(plain.chains == 1);
   CHECK(plain.convergence.empty());
+}
+
+TEST_CASE("the weights' ESS and the MCMC's smallest ESS have their own names, and a file with the older ess reads",
+          "[io][posterior]") {
+  test::TempDir dir;
+  const std::string path = dir.file("p.json");
+  fleet::PosteriorCloud smc = random_cloud(40, 5, false);
+  fleet::PosteriorCloud mcmc = random_cloud(40, 6, false);
+  mcmc.method = "mcmc";
+  mcmc.weights.setConstant(1.0 / 40.0);
+  mcmc.weight_ess = 40.0;
+  mcmc.min_ess = 12.5;
+  for (const fleet::PosteriorCloud* c : {&smc, &mcmc}) {
+    const bool is_mcmc = c->method == "mcmc";
+    write(path, *c);
+    nlohmann::json j = nlohmann::json::parse(test::read_text(path));
+    CHECK(j.contains("weight_ess") == !is_mcmc);
+    CHECK(j.contains("min_ess") == is_mcmc);
+    CHECK(!j.contains("ess"));
+    const fleet::PosteriorCloud back = io::read_posterior_file(path);
+    CHECK(back.weight_ess == (is_mcmc ? 40.0 : smc.weight_ess));
+    CHECK((is_mcmc ? back.min_ess == mcmc.min_ess : std::isnan(back.min_ess)));
+    // As files held it before: one "ess", whose meaning was the method's (no checksum: such a file
+    // still reads, and the edit would break one).
+    const char* name = is_mcmc ? "min_ess" : "weight_ess";
+    j["ess"] = j[name];
+    j.erase(name);
+    j.erase("checksum");
+    test::write_text(path, j.dump(1));
+    const fleet::PosteriorCloud old = io::read_posterior_file(path);
+    CHECK((is_mcmc ? old.min_ess == mcmc.min_ess : old.weight_ess == smc.weight_ess));
+  }
 }

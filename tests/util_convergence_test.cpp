@@ -66,6 +66,7 @@ nlohmann::json summary_json(const util::ConvergenceSummary& s) {
           {"rhat", s.rhat},
           {"rhat_bulk", s.rhat_bulk},
           {"rhat_tail", s.rhat_tail},
+          {"rhat_unsplit", s.rhat_unsplit},
           {"ess_bulk", s.ess_bulk},
           {"ess_tail", s.ess_tail},
           {"ess_q05", s.ess_q05},
@@ -146,6 +147,12 @@ TEST_CASE("R-hat is 1 and ESS is the number of draws for independent normal draw
   CHECK(s.rhat < 1.0 + 2.5 / n);
   CHECK(s.rhat_bulk > std::sqrt(1.0 - 1.0 / n));
   CHECK(s.rhat_tail > std::sqrt(1.0 - 1.0 / n));
+  // Not split: 4 chains of N = 250,000, N var(means)/W ~ chi^2_3/3 =: G, so R-hat - 1 ~ (G - 1)/(2N)
+  // < 10/(2N) unless G > 11 (chi^2_3 > 33, probability below 1e-6).
+  const double N = 250000.0;
+  INFO("rhat unsplit " << s.rhat_unsplit);
+  CHECK(s.rhat_unsplit < 1.0 + 5.0 / N);
+  CHECK(s.rhat_unsplit > std::sqrt(1.0 - 1.0 / N));
   // ESS = S / tau with tau - 1 a sum of a few autocorrelation estimates, each N(0, 1/S) for iid
   // draws: weight 2 on up to 16 lags gives an sd of at most 2 sqrt(16/S) = 0.008 at S = 10^6, so
   // 4 % is 5 sd. The quantile indicators are iid too.
@@ -196,6 +203,8 @@ TEST_CASE("a chain shifted by 3 sd gives R-hat far above 1", "[util][convergence
   INFO("rhat bulk " << s.rhat_bulk << ", tail " << s.rhat_tail);
   CHECK(s.rhat_bulk > 1.3);
   CHECK(s.rhat > 1.3);
+  // Not split (the 4 chains as 4 independent runs): var(means) over 4 is about 0.7 against W 0.5.
+  CHECK(s.rhat_unsplit > 1.3);
   // The same chains unshifted pass.
   CHECK(util::rhat(ar1_chains(0.5, 1000, 4, 202)) < 1.01);
 }

@@ -110,7 +110,7 @@ PosteriorCloud to_posterior_cloud(const std::vector<BatchMcmcResult>& chains, co
     const double e = cloud.convergence[static_cast<std::size_t>(j)].ess_bulk;
     if (!std::isnan(e)) ess = std::min(ess, e);  // a pinned box edge says nothing
   }
-  cloud.ess = std::isfinite(ess) ? ess : static_cast<double>(rows);
+  cloud.min_ess = std::isfinite(ess) ? ess : static_cast<double>(rows);
   return cloud;
 }
 

@@ -41,7 +41,7 @@ std::vector<ParameterConvergence> chain_convergence(const std::vector<BatchMcmcR
                                                     const ModelExtension* extension);
 
 // The posterior of the pooled chains (every kept draw, equal weights), with `chains` and
-// `convergence` filled; ess is the smallest bulk-ESS over the hyperparameters.
+// `convergence` filled; min_ess is the smallest bulk-ESS over the hyperparameters.
 PosteriorCloud to_posterior_cloud(const std::vector<BatchMcmcResult>& chains, const site::Site& site,
                                   const std::vector<records::WimRecord>& records, const ModelExtension* extension);
 

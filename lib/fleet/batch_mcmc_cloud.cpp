@@ -30,7 +30,8 @@ PosteriorCloud to_posterior_cloud(const BatchMcmcResult& result, const site::Sit
     const double e = chain_effective_sample_size(result.theta_draws.col(j));
     ess = std::isnan(e) ? ess : std::min(ess, e);  // a constant column (a pinned box edge) says nothing
   }
-  c.ess = std::isfinite(ess) ? ess : static_cast<double>(draws);
+  c.weight_ess = static_cast<double>(draws);
+  c.min_ess = std::isfinite(ess) ? ess : static_cast<double>(draws);
   c.log_evidence = std::numeric_limits<double>::quiet_NaN();
   if (extension != nullptr) {
     c.model = extension->name();

@@ -12,7 +12,7 @@
 
 namespace ssrfleet::fleet {
 
-// method "mcmc"; theta kHyperCount x kept draws; equal weights; ess = the smallest Geyer chain ESS
+// method "mcmc"; theta kHyperCount x kept draws; equal weights; min_ess = the smallest Geyer chain ESS
 // over the seven hyperparameters (the figure that limits every summary); log_evidence NaN (the
 // batch sampler does not estimate it). With the extension the chain fitted: its name as the model
 // and its ψ draws.

@@ -3,6 +3,7 @@
 // enough about the site to refuse a prediction that mixes up sites.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -31,14 +32,19 @@ struct SiteCalibration {
   std::vector<double> se;
 };
 
-// How well one parameter's draws are converged, from several independent chains
-// (fleet/batch_mcmc_chains.hpp; Vehtari et al. 2021): R̂ (rank-normalised split, the larger of bulk
+// How well one parameter's draws are converged, from several independent runs (Vehtari et al.
+// 2021). MCMC chains (fleet/batch_mcmc_chains.hpp): R̂ (rank-normalised split, the larger of bulk
 // and tail), bulk- and tail-ESS, and the Monte Carlo standard errors of the mean and of the 5 % and
-// 95 % quantiles.
+// 95 % quantiles from the chains' autocorrelation; ess_equivalent NaN. SMC runs
+// (fleet/smc_runs.hpp): R̂ of the runs' equal-weight draws, not split (a run's draws have no
+// order); the MCSEs from the spread of the runs' means and quantiles; the equivalent ESS, the
+// number of independent draws whose mean would have the pooled mean's Monte Carlo error; bulk- and
+// tail-ESS NaN (they measure a chain's autocorrelation, which a run does not have).
 struct ParameterConvergence {
   std::string name;
   double rhat = 0.0, ess_bulk = 0.0, ess_tail = 0.0;
   double mcse_mean = 0.0, mcse_q05 = 0.0, mcse_q95 = 0.0;
+  double ess_equivalent = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct PosteriorCloud {
@@ -52,9 +58,15 @@ struct PosteriorCloud {
   int sensors = 0;
   double lateral_min_m = 0.0, lateral_max_m = 0.0;
   long trucks_seen = 0;
-  double ess = 0.0;               // SMC: the weights' ESS of one sweep's cloud (of the P particles)
-  // MCMC: the independent chains pooled in theta (their draws one after the other, equal counts),
-  // and each parameter's convergence over them (empty for one chain and for SMC).
+  // SMC: the weights' ESS of one sweep's cloud (of the P particles; of R independent runs pooled,
+  // R² / Σ_r 1/ESS_r, the ESS of their particles each weighted 1/R). MCMC: the kept draws' count.
+  double weight_ess = 0.0;
+  // MCMC: the smallest ESS over the hyperparameters (several chains: bulk-ESS; one chain: Geyer's
+  // ESS of the chain); NaN for SMC, whose Monte Carlo error "convergence" gives with several runs.
+  double min_ess = std::numeric_limits<double>::quiet_NaN();
+  // The independent runs pooled in theta, their draws one after the other in equal counts: MCMC
+  // chains, or SMC runs (fit --runs, each run's weights scaled to sum to 1/chains); and each
+  // parameter's convergence over them (empty for one run).
   int chains = 1;
   std::vector<ParameterConvergence> convergence;
   // SMC: the number of final sweeps whose clouds are pooled in theta (each particle's weight shared

@@ -27,7 +27,7 @@ inline PosteriorCloud smc_cloud(const site::Site& site, const smc::TemperedSampl
   c.lateral_min_m = site.lateral_min_m();
   c.lateral_max_m = site.lateral_max_m();
   c.trucks_seen = trucks_seen;
-  c.ess = sampler.ess();
+  c.weight_ess = sampler.ess();
   c.log_evidence = sampler.log_evidence();
   return c;
 }

@@ -27,6 +27,7 @@ void write_convergence(const fleet::PosteriorCloud& c, nlohmann::json& j) {
     out[p.name] = {{"rhat", number_or_null(p.rhat)},           {"ess_bulk", number_or_null(p.ess_bulk)},
                    {"ess_tail", number_or_null(p.ess_tail)},   {"mcse_mean", number_or_null(p.mcse_mean)},
                    {"mcse_q05", number_or_null(p.mcse_q05)},   {"mcse_q95", number_or_null(p.mcse_q95)}};
+    if (std::isfinite(p.ess_equivalent)) out[p.name]["ess_equivalent"] = p.ess_equivalent;
   }
   j["convergence"] = std::move(out);
 }
@@ -55,6 +56,8 @@ void read_convergence(const nlohmann::json& j, const std::string& path, const st
     p.mcse_mean = number_at(it.value(), "mcse_mean", path, where);
     p.mcse_q05 = number_at(it.value(), "mcse_q05", path, where);
     p.mcse_q95 = number_at(it.value(), "mcse_q95", path, where);
+    // SMC runs' only (MCMC chains' files leave it out).
+    p.ess_equivalent = it.value().contains("ess_equivalent") ? number_at(it.value(), "ess_equivalent", path, where) : NAN;
     c.convergence.push_back(p);
   }
 }

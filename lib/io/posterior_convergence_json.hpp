@@ -1,8 +1,8 @@
 // The posterior file's optional convergence fields (docs/outputs.md): "chains", the number of
-// independent MCMC chains pooled in the draws, and "convergence", per parameter R̂, bulk- and
-// tail-ESS and the Monte Carlo standard errors of the mean and of the 5 % and 95 % quantiles
-// (fleet::ParameterConvergence). Written only for several chains; a file without them is one
-// chain's (or an SMC run's).
+// independent runs pooled in the draws (MCMC chains or SMC runs), and "convergence", per parameter
+// R̂, bulk- and tail-ESS, the Monte Carlo standard errors of the mean and of the 5 % and 95 %
+// quantiles, and for SMC runs the equivalent ESS (fleet::ParameterConvergence). Written only for
+// several runs; a file without them is one chain's or one SMC run's.
 #pragma once
 
 #include <string>

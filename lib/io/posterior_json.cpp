@@ -73,7 +73,12 @@ nlohmann::json posterior_to_json(const fleet::PosteriorCloud& c, const std::vect
   }
   j["trucks_seen"] = c.trucks_seen;
   j["particles"] = c.theta.cols();
-  j["ess"] = c.ess;
+  // Two different numbers, each under its own name (files before them held one of them as "ess").
+  if (c.method == "mcmc") {
+    j["min_ess"] = number_or_null(c.min_ess);  // null: no hyperparameter varied
+  } else {
+    j["weight_ess"] = c.weight_ess;
+  }
   if (c.pooled_sweeps > 0) j["pooled_sweeps"] = c.pooled_sweeps;  // "particles" then counts every sweep's copy
   write_convergence(c, j);
   j["log_evidence"] = number_or_null(c.log_evidence);
@@ -288,7 +293,15 @@ fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std:
   }
   c.method = get_field<std::string>(j, "method", path, P);
   c.trucks_seen = get_field<long>(j, "trucks_seen", path, P);
-  c.ess = get_field<double>(j, "ess", path, P);
+  // Files written before the two names held the method's number as "ess".
+  const char* ess_name = c.method == "mcmc" ? "min_ess" : "weight_ess";
+  const char* ess_field = j.contains(ess_name) || !j.contains("ess") ? ess_name : "ess";
+  const double ess = j.contains(ess_field) && j[ess_field].is_null() ? NAN : get_field<double>(j, ess_field, path, P);
+  if (c.method == "mcmc") {
+    c.min_ess = ess;
+  } else {
+    c.weight_ess = ess;
+  }
   c.pooled_sweeps = j.contains("pooled_sweeps") ? get_field<int>(j, "pooled_sweeps", path, P) : 0;
   if (c.pooled_sweeps < 0) throw DataError(path, 0, P + "pooled_sweeps", "must be >= 0");
   read_convergence(j, path, P, c);
@@ -328,6 +341,7 @@ fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std:
   }
   if (!(total > 0.0)) throw DataError(path, 0, P + "cloud.weights", "all weights are zero");
   c.weights /= total;
+  if (c.method == "mcmc") c.weight_ess = static_cast<double>(c.weights.size());  // equal weights
   // The model: files written before models existed are the base model's.
   if (site.contains("sites")) parse_sites(site["sites"], path, P + "site.sites", c);
   if (j.contains("calibration")) parse_calibration(j["calibration"], path, P + "calibration", c);

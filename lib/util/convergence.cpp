@@ -129,6 +129,15 @@ double rhat_tail_about(const Eigen::Ref<const Eigen::MatrixXd>& draws, double me
   return basic_rhat(rank_normalise(split_chains(folded)));
 }
 
+double rhat_unsplit_about(const Eigen::Ref<const Eigen::MatrixXd>& draws, double median) {
+  if (degenerate(draws)) return kNaN;
+  const Eigen::MatrixXd folded = (draws.array() - median).abs().matrix();
+  if (degenerate(folded)) return kNaN;
+  const double bulk = basic_rhat(rank_normalise(draws)), tail = basic_rhat(rank_normalise(folded));
+  if (std::isnan(bulk) || std::isnan(tail)) return kNaN;
+  return std::max(bulk, tail);
+}
+
 // ESS of the indicator chains I(θ <= threshold), split.
 double ess_at_or_below(const Eigen::Ref<const Eigen::MatrixXd>& draws, double threshold) {
   const Eigen::MatrixXd below = (draws.array() <= threshold).cast<double>().matrix();
@@ -152,6 +161,11 @@ double rhat(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
   const double bulk = rhat_bulk(draws), tail = rhat_tail(draws);
   if (std::isnan(bulk) || std::isnan(tail)) return kNaN;
   return std::max(bulk, tail);
+}
+
+double rhat_unsplit(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
+  if (degenerate(draws)) return kNaN;
+  return rhat_unsplit_about(draws, sorted_quantile_type7(sorted_draws(draws), 0.5));
 }
 
 double ess_bulk(const Eigen::Ref<const Eigen::MatrixXd>& draws) {
@@ -205,6 +219,7 @@ ConvergenceSummary summarise_convergence(const Eigen::Ref<const Eigen::MatrixXd>
   out.rhat_tail = undefined ? kNaN : rhat_tail_about(draws, out.q50);
   out.rhat =
       std::isnan(out.rhat_bulk) || std::isnan(out.rhat_tail) ? kNaN : std::max(out.rhat_bulk, out.rhat_tail);
+  out.rhat_unsplit = undefined ? kNaN : rhat_unsplit_about(draws, out.q50);
   out.ess_bulk = ess_bulk(draws);
   out.ess_q05 = undefined ? kNaN : ess_at_or_below(draws, out.q05);
   out.ess_q95 = undefined ? kNaN : ess_at_or_below(draws, out.q95);

@@ -17,6 +17,11 @@
 // Bulk R̂ is R̂ of the rank-normalised split chains; tail R̂ that of the folded draws
 // |θ - median(θ)| (median over all draws), rank-normalised and split, which sees chains that agree
 // in location but not in scale. R̂ = max(bulk R̂, tail R̂); the paper asks for R̂ < 1.01.
+// Unsplit R̂ is the same max of bulk and tail R̂ of the chains as they are, not split: for
+// independent runs whose draws have no order within a run (an SMC run's equal-weight draws), where
+// halves of a run are not two chains. For runs of N independent draws each, R̂² ≈ 1 + B/W - 1/N, B
+// the variance of the runs' means and W the within-run variance: runs whose means scatter by a tenth
+// of a posterior sd give R̂ ≈ 1.005.
 //
 // ESS (util/effective_sample_size.hpp: Geyer's initial monotone sequence on the multi-chain
 // autocorrelation):
@@ -55,6 +60,7 @@ struct ConvergenceSummary {
   double rhat = 0.0;                       // max(rhat_bulk, rhat_tail)
   double rhat_bulk = 0.0;                  // rank-normalised split R̂
   double rhat_tail = 0.0;                  // rank-normalised split R̂ of the folded draws
+  double rhat_unsplit = 0.0;               // max of bulk and tail R̂ of the chains not split
   double ess_bulk = 0.0;
   double ess_tail = 0.0;  // min(ess_q05, ess_q95)
   double ess_q05 = 0.0, ess_q95 = 0.0;
@@ -77,6 +83,8 @@ double rhat_bulk(const Eigen::Ref<const Eigen::MatrixXd>& draws);
 double rhat_tail(const Eigen::Ref<const Eigen::MatrixXd>& draws);
 // max(rhat_bulk, rhat_tail): NaN when either is.
 double rhat(const Eigen::Ref<const Eigen::MatrixXd>& draws);
+// The same of the chains not split (independent runs' unordered draws): NaN when either is.
+double rhat_unsplit(const Eigen::Ref<const Eigen::MatrixXd>& draws);
 
 double ess_bulk(const Eigen::Ref<const Eigen::MatrixXd>& draws);
 // ESS of the p-quantile's indicator, p in (0, 1).
