@@ -17,9 +17,12 @@ main_packages=(build-essential cmake libeigen3-dev libboost-dev libboost-program
 # Beyond the main job: git (CI clones the checkout), Catch2 (tests), sqlite3 (the tests query the
 # history), python3-numpy (the independent check of the convergence diagnostics), python3-xarray
 # and python3-netcdf4 (the draws files opened as a notebook would), GNU parallel
-# (scripts/fit-sites.sh), Open MPI (ssrfleet-mpi and its test), help2man (the man pages).
+# (scripts/fit-sites.sh), Open MPI (ssrfleet-mpi and its test), help2man (the man pages), and the
+# Python module `import ssrfleet` (python3-dev, pybind11-dev) with its tests (python3-pytest) and
+# what notebooks use beside it (python3-pandas, python3-matplotlib).
 full_packages=("${main_packages[@]}" git catch2 sqlite3 python3-numpy python3-xarray python3-netcdf4 parallel
-               libopenmpi-dev openmpi-bin help2man)
+               libopenmpi-dev openmpi-bin help2man python3-dev pybind11-dev python3-pytest python3-pandas
+               python3-matplotlib)
 case "${1:-}" in
   --main) packages=("${main_packages[@]}") ;;
   "") packages=("${full_packages[@]}") ;;

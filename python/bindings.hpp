@@ -1,0 +1,17 @@
+// The compiled part of the Python module (ssrfleet._core): each file binds one topic. The package
+// python/ssrfleet/ wraps it with keyword defaults, array checks and the DataFrame conversion.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+namespace ssrfleet::python {
+
+// The exception classes (ssrfleet.Error and its children) and the translation of the library's
+// errors into them (errors.cpp).
+void bind_errors(pybind11::module_& m);
+// Roads, sites and simulate (sites.cpp).
+void bind_sites(pybind11::module_& m);
+// fit, the posterior, read_posterior and predict (posterior.cpp).
+void bind_posterior(pybind11::module_& m);
+
+}  // namespace ssrfleet::python

@@ -1,0 +1,380 @@
+// fit, the posterior and predict: `ssrfleet fit` and `ssrfleet predict` as functions. The fit runs
+// the commands' own code (bin/fit_methods.hpp: fit_smc, fit_mcmc, FitFlags) class by class with
+// the classes' seeds, and the posterior file is written by the same functions as the command's, so
+// a seed gives the command's file to the byte.
+#include <cmath>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "cli_common.hpp"
+#include "draws_output.hpp"
+#include "fit_methods.hpp"
+#include "fleet/equal_weight_draws.hpp"
+#include "fleet/posterior_summary.hpp"
+#include "fleet/vehicle_classes.hpp"
+#include "io/posterior_json.hpp"
+#include "io/wim_log.hpp"
+#include "model/fleet_model.hpp"
+#include "model/model_spec.hpp"
+#include "predict/ssr_prediction.hpp"
+#include "site_handle.hpp"
+#include "util/errors.hpp"
+
+namespace py = pybind11;
+
+namespace ssrfleet::python {
+
+namespace {
+
+struct PosteriorHandle {
+  fleet::ClassPosteriors classes;
+  // What the fit had (a posterior read from a file has neither): the site predict defaults to, and
+  // the log the NetCDF draws carry as observed data.
+  std::shared_ptr<const site::Site> site;
+  std::vector<records::WimRecord> records;
+  std::uint64_t seed = 1;
+};
+
+// The log given as arrays, checked by the very reader a log file goes through (the same limits,
+// the same DataError): the arrays are written as the WIM log CSV (full precision, so every number
+// reads back to its bits) and read again. A record's DataError names the file "log", its line (the
+// header is line 1, row r is line r + 2) and its field.
+std::vector<records::WimRecord> records_of_arrays(const std::vector<std::string>& truck_id,
+                                                  const std::optional<py::array_t<double>>& time_s,
+                                                  const py::array_t<double>& speed, const py::array_t<double>& mass,
+                                                  const py::array_t<double>& impact,
+                                                  const std::optional<std::vector<std::string>>& classes,
+                                                  const SiteHandle& where, const io::WimLimits& limits) {
+  const auto n = static_cast<py::ssize_t>(truck_id.size());
+  if (n < 1) throw DataError("log", 2, "truck_id", "the log holds no truck records");
+  if (speed.ndim() != 1 || speed.shape(0) != n) throw UsageError("log: speed_mps must hold one number per truck");
+  if (mass.ndim() != 1 || mass.shape(0) != n) throw UsageError("log: sprung_mass_kg must hold one number per truck");
+  if (time_s && (time_s->ndim() != 1 || time_s->shape(0) != n)) throw UsageError("log: time_s must hold one number per truck");
+  if (classes && static_cast<py::ssize_t>(classes->size()) != n) throw UsageError("log: class must hold one label per truck");
+  if (impact.ndim() != 2 || impact.shape(0) != n) throw UsageError("log: impact_factor must be (trucks, sensors)");
+  const py::ssize_t m = impact.shape(1);
+  if (m != where.site->sensors()) {
+    throw DataError("log", 1, "if_" + std::to_string(m),
+                    "the log has " + std::to_string(m) + " sensors but the site has " +
+                        std::to_string(where.site->sensors()) + " (sensors " + where.flags.sensors + ")");
+  }
+  std::vector<records::WimRecord> written(static_cast<std::size_t>(n));
+  const auto s = speed.unchecked<1>();
+  const auto w = mass.unchecked<1>();
+  const auto f = impact.unchecked<2>();
+  for (py::ssize_t i = 0; i < n; ++i) {
+    records::WimRecord& r = written[static_cast<std::size_t>(i)];
+    r.truck_id = truck_id[static_cast<std::size_t>(i)];
+    if (time_s) r.time_s = time_s->at(i);
+    r.speed_mps = s(i);
+    r.sprung_mass_kg = w(i);
+    r.impact_factor.resize(m);
+    for (py::ssize_t j = 0; j < m; ++j) r.impact_factor(j) = f(i, j);
+    if (classes) r.vehicle_class = (*classes)[static_cast<std::size_t>(i)];
+  }
+  std::stringstream csv;
+  io::write_wim_log(csv, written);
+  io::WimLogReader reader(csv, "log", where.site->options().unsprung_mass_kg, limits);
+  std::vector<records::WimRecord> records;
+  records::WimRecord r;
+  io::Rejection why;
+  for (;;) {
+    const auto status = reader.next(r, why);
+    if (status == io::WimLogReader::Status::end) break;
+    if (status == io::WimLogReader::Status::rejected) throw DataError("log", why.line, why.field, why.reason);
+    records.push_back(std::move(r));
+  }
+  if (static_cast<py::ssize_t>(records.size()) != n) {
+    throw DataError("log", 2, "truck_id", "the log's rows did not all read back (a truck id with a comma or a newline?)");
+  }
+  return records;
+}
+
+// An option given from Python: None leaves the command's default.
+template <typename T>
+bool take(const py::dict& options, const char* key, T& value) {
+  if (!options.contains(key) || options[key].is_none()) return false;
+  value = options[key].cast<T>();
+  return true;
+}
+
+std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optional<std::string>& log_path,
+                                     const py::object& arrays, const std::string& method, std::uint64_t seed,
+                                     const py::dict& options) {
+  cli::FitFlags flags;
+  take(options, "model", flags.model);
+  flags.core_given = take(options, "core", flags.core);
+  take(options, "particles", flags.particles);
+  take(options, "threads", flags.threads);
+  take(options, "older_sweeps", flags.older_sweeps);
+  flags.final_sweeps_given = take(options, "final_sweeps", flags.final_sweeps);
+  take(options, "window", flags.window);
+  take(options, "cess", flags.cess_target);
+  flags.max_sweeps_given = take(options, "max_sweeps", flags.max_sweeps);
+  take(options, "iterations", flags.iterations);
+  take(options, "burn_in", flags.burn_in);
+  take(options, "thin", flags.thin);
+  const bool chains_given = take(options, "chains", flags.chains);
+  const bool runs_given = take(options, "runs", flags.runs);
+  bool fhwa = false, progress = false;
+  take(options, "fhwa_classes", fhwa);
+  take(options, "progress", progress);
+  if (flags.threads < 0) throw UsageError("threads must be >= 0 (0 = all cores)");
+
+  // The command's checks, in its order.
+  cli::check_particles(flags.particles);
+  if (method != "smc" && method != "mcmc") throw UsageError("method '" + method + "': must be smc or mcmc");
+  if (method == "mcmc" && runs_given) {
+    throw UsageError("runs repeats the SMC; the batch MCMC's independent runs are its chains");
+  }
+  if (method == "smc" && chains_given) {
+    throw UsageError("chains are the batch MCMC's (method='mcmc'); the SMC's independent runs are runs");
+  }
+  const site::Site& site = *where.site;
+  const fleet::ModelSpec model = fleet::parse_model_spec(flags.model, site);
+  io::WimLimits limits;
+  limits.fhwa_classes = fhwa;
+
+  auto out = std::make_shared<PosteriorHandle>();
+  out->site = where.site;
+  out->seed = seed;
+  if (log_path) {
+    py::gil_scoped_release release;
+    out->records = cli::read_site_log(*log_path, site, where.flags, limits);
+  } else {
+    const auto t = arrays.cast<py::tuple>();
+    out->records = records_of_arrays(
+        t[0].cast<std::vector<std::string>>(),
+        t[1].is_none() ? std::nullopt : std::optional<py::array_t<double>>(t[1].cast<py::array_t<double>>()),
+        t[2].cast<py::array_t<double>>(), t[3].cast<py::array_t<double>>(), t[4].cast<py::array_t<double>>(),
+        t[5].is_none() ? std::nullopt : std::optional<std::vector<std::string>>(t[5].cast<std::vector<std::string>>()),
+        where, limits);
+  }
+  py::gil_scoped_release release;
+  std::ostream* stream = progress ? &std::cerr : nullptr;
+  // fit_classes_to_file's loop (bin/fit_classes.cpp) without its file: each class with its seed.
+  for (const auto& [label, class_records] : fleet::split_by_class(out->records)) {
+    const std::uint64_t class_seed = fleet::class_seed(seed, label);
+    fleet::PosteriorCloud cloud = method == "smc"
+                                      ? cli::fit_smc(site, class_records, flags, class_seed, stream, model.extension.get())
+                                      : cli::fit_mcmc(site, class_records, flags, class_seed, stream, model.extension.get());
+    out->classes.push_back({label, std::move(cloud)});
+  }
+  return out;
+}
+
+std::shared_ptr<PosteriorHandle> read_posterior(const std::string& path) {
+  auto out = std::make_shared<PosteriorHandle>();
+  py::gil_scoped_release release;
+  out->classes = io::read_posterior_classes(path);
+  return out;
+}
+
+// The class asked for; an unlabelled posterior is its one class.
+const fleet::PosteriorCloud& cloud_of(const PosteriorHandle& p, const std::optional<std::string>& label) {
+  if (!label) {
+    if (fleet::unlabelled(p.classes) || p.classes.size() == 1) return p.classes.front().cloud;
+    throw UsageError("the posterior has vehicle classes " + fleet::list_labels(p.classes) +
+                     ": give vehicle_class=LABEL");
+  }
+  for (const auto& c : p.classes) {
+    if (c.label == *label) return c.cloud;
+  }
+  throw UsageError("vehicle_class '" + *label + "': the posterior's classes are " + fleet::list_labels(p.classes));
+}
+
+std::vector<std::string> parameter_names(const fleet::PosteriorCloud& cloud) {
+  std::vector<std::string> names(fleet::kHyperNames.begin(), fleet::kHyperNames.end());
+  names.insert(names.end(), cloud.psi_names.begin(), cloud.psi_names.end());
+  return names;
+}
+
+py::dict summary(const PosteriorHandle& p, const std::optional<std::string>& label) {
+  const fleet::PosteriorCloud& cloud = cloud_of(p, label);
+  std::vector<fleet::ParameterSummary> all = fleet::summarise_cloud(cloud);
+  const std::vector<fleet::ParameterSummary> psi = fleet::summarise_psi(cloud);
+  all.insert(all.end(), psi.begin(), psi.end());
+  const std::vector<std::string> names = parameter_names(cloud);
+  py::dict out;
+  for (std::size_t i = 0; i < all.size() && i < names.size(); ++i) {
+    py::dict s;
+    s["mean"] = all[i].mean;
+    s["sd"] = all[i].sd;
+    s["q025"] = all[i].q025;
+    s["q975"] = all[i].q975;
+    out[py::str(names[i])] = s;
+  }
+  return out;
+}
+
+py::tuple draws(const PosteriorHandle& p, const std::optional<std::string>& label) {
+  const fleet::PosteriorCloud& cloud = cloud_of(p, label);
+  const fleet::EqualWeightDraws d = fleet::equal_weight_draws(cloud);
+  const auto hyper = static_cast<py::ssize_t>(d.theta.rows()), psi = static_cast<py::ssize_t>(d.psi.rows());
+  const py::ssize_t chains = d.chains, per_chain = d.draws;
+  py::array_t<double> out({chains, per_chain, hyper + psi});
+  auto a = out.mutable_unchecked<3>();
+  for (py::ssize_t c = 0; c < chains; ++c) {
+    for (py::ssize_t k = 0; k < per_chain; ++k) {
+      const Eigen::Index column = c * per_chain + k;
+      for (py::ssize_t q = 0; q < hyper; ++q) a(c, k, q) = d.theta(q, column);
+      for (py::ssize_t q = 0; q < psi; ++q) a(c, k, hyper + q) = d.psi(q, column);
+    }
+  }
+  return py::make_tuple(out, parameter_names(cloud));
+}
+
+py::dict convergence(const PosteriorHandle& p, const std::optional<std::string>& label) {
+  const fleet::PosteriorCloud& cloud = cloud_of(p, label);
+  py::dict out;
+  for (const auto& c : cloud.convergence) {
+    py::dict d;
+    d["rhat"] = c.rhat;
+    d["ess_bulk"] = c.ess_bulk;
+    d["ess_tail"] = c.ess_tail;
+    d["ess_equivalent"] = c.ess_equivalent;
+    d["mcse_mean"] = c.mcse_mean;
+    d["mcse_q05"] = c.mcse_q05;
+    d["mcse_q95"] = c.mcse_q95;
+    out[py::str(c.name)] = d;
+  }
+  return out;
+}
+
+// The posterior file, as fit_classes_to_file writes it (bin/fit_classes.cpp).
+void to_json(const PosteriorHandle& p, const std::string& path) {
+  py::gil_scoped_release release;
+  std::vector<std::vector<fleet::ParameterSummary>> hyper, psi;
+  for (const auto& c : p.classes) {
+    hyper.push_back(fleet::summarise_cloud(c.cloud));
+    psi.push_back(fleet::summarise_psi(c.cloud));
+  }
+  cli::write_output(path, [&](std::ostream& os) {
+    os << io::posterior_file_text(io::posterior_classes_to_json(p.classes, hyper, psi));
+  });
+}
+
+// The draws file (docs/draws.md) as fit --draws-out writes it: with the fitted log as observed
+// data and the posterior predictive when the posterior came from a fit here.
+void write_draws(const PosteriorHandle& p, const std::string& path, const std::optional<std::string>& label) {
+  cli::draws_format(path, "path");
+  const fleet::PosteriorCloud& cloud = cloud_of(p, label);
+  cli::DrawsExtras extras;
+  std::vector<records::WimRecord> class_records;
+  if (!p.records.empty()) {
+    if (label && !label->empty()) {
+      for (const auto& r : p.records) {
+        if (r.vehicle_class == *label) class_records.push_back(r);
+      }
+      extras.observed = &class_records;
+    } else {
+      extras.observed = &p.records;
+    }
+    extras.site = p.site.get();
+    extras.seed = p.seed;
+  }
+  py::gil_scoped_release release;
+  cli::write_draws(path, cloud, extras);
+}
+
+// `ssrfleet predict`: positions checked as --positions is (finite, strictly increasing).
+py::dict predict(const PosteriorHandle& p, const SiteHandle& where, const std::vector<double>& positions, int draws,
+                 int trucks_per_draw, std::uint64_t seed, bool fixed_traffic, bool new_road,
+                 const std::optional<std::string>& label, const std::string& mix, const std::optional<std::string>& out) {
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    if (!std::isfinite(positions[i])) throw UsageError("positions[" + std::to_string(i) + "] is not a finite number");
+    if (i > 0 && !(positions[i] > positions[i - 1])) {
+      throw UsageError("positions[" + std::to_string(i) + "]: positions must be strictly increasing");
+    }
+  }
+  predict::PredictionOptions options;
+  options.theta_draws = draws;
+  options.trucks_per_draw = trucks_per_draw;
+  options.seed = seed;
+  options.traffic_bootstrap = !fixed_traffic;
+  options.validate();
+  if (label && !mix.empty()) throw UsageError("give vehicle_class or mix, not both");
+  fleet::ClassPosteriors classes = p.classes;
+  if (fleet::unlabelled(classes) && (label || !mix.empty())) {
+    throw UsageError(std::string(label ? "vehicle_class" : "mix") + ": the posterior has no vehicle classes");
+  }
+  if (label) classes = fleet::select_class(classes, *label);
+  const std::vector<double> shares = fleet::class_shares(classes, fleet::parse_mix(mix, "mix"));
+  if (!new_road) {
+    cli::require_fitted_site(classes.front().cloud, "this posterior", *where.site,
+                             "; pass new_road=True to predict for a different road on purpose");
+  }
+  predict::SsrPrediction prediction;
+  {
+    py::gil_scoped_release release;
+    prediction = predict::predict_ssr_mixture(classes, shares, *where.site, positions, options);
+    if (out) cli::write_output(*out, [&](std::ostream& os) { predict::write_prediction_csv(os, prediction); });
+  }
+  const auto array = [](const Eigen::ArrayXd& a) {
+    return py::array_t<double>(static_cast<py::ssize_t>(a.size()), a.data());
+  };
+  py::dict result;
+  result["position_m"] = py::array_t<double>(static_cast<py::ssize_t>(prediction.position_m.size()),
+                                             prediction.position_m.data());
+  result["mean_if"] = array(prediction.mean_if);
+  result["lower95"] = array(prediction.lower95);
+  result["upper95"] = array(prediction.upper95);
+  result["mean_lower95"] = array(prediction.mean_lower95);
+  result["mean_upper95"] = array(prediction.mean_upper95);
+  return result;
+}
+
+}  // namespace
+
+void bind_posterior(py::module_& m) {
+  py::class_<PosteriorHandle, std::shared_ptr<PosteriorHandle>>(m, "_Posterior")
+      .def_property_readonly("labels",
+                             [](const PosteriorHandle& p) {
+                               std::vector<std::string> l;
+                               for (const auto& c : p.classes) l.push_back(c.label);
+                               return l;
+                             })
+      .def_property_readonly("has_fit_site", [](const PosteriorHandle& p) { return p.site != nullptr; })
+      .def("info",
+           [](const PosteriorHandle& p, const std::optional<std::string>& label) {
+             const fleet::PosteriorCloud& c = cloud_of(p, label);
+             py::dict d;
+             d["method"] = c.method;
+             d["model"] = c.model;
+             d["chains"] = c.chains;
+             d["trucks_seen"] = c.trucks_seen;
+             d["particles"] = c.theta.cols();
+             d["weight_ess"] = c.weight_ess;
+             d["min_ess"] = c.min_ess;
+             d["log_evidence"] = c.log_evidence;
+             d["road_name"] = c.road_name;
+             d["site_fingerprint"] = c.site_fingerprint;
+             d["sensors"] = c.sensors;
+             d["parameters"] = parameter_names(c);
+             return d;
+           },
+           py::arg("vehicle_class") = py::none())
+      .def("summary", &summary, py::arg("vehicle_class") = py::none())
+      .def("draws", &draws, py::arg("vehicle_class") = py::none())
+      .def("convergence", &convergence, py::arg("vehicle_class") = py::none())
+      .def("to_json", &to_json, py::arg("path"))
+      .def("write_draws", &write_draws, py::arg("path"), py::arg("vehicle_class") = py::none())
+      .def("predict", &predict, py::arg("site"), py::arg("positions"), py::arg("draws"), py::arg("trucks_per_draw"),
+           py::arg("seed"), py::arg("fixed_traffic"), py::arg("new_road"), py::arg("vehicle_class"), py::arg("mix"),
+           py::arg("out"));
+  m.def("_fit", &fit, py::arg("site"), py::arg("log_path"), py::arg("arrays"), py::arg("method"), py::arg("seed"),
+        py::arg("options"));
+  m.def("_read_posterior", &read_posterior, py::arg("path"));
+}
+
+}  // namespace ssrfleet::python
