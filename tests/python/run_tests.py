@@ -5,6 +5,7 @@ import importlib
 import os
 import sys
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 here = os.path.dirname(os.path.abspath(__file__))
 if len(sys.argv) != 3:
     sys.exit("usage: run_tests.py MODULE_DIR SSRFLEET_COMMAND (the build's python/ folder and its ssrfleet)")

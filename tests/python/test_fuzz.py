@@ -81,7 +81,7 @@ def test_simulate_survives_random_arguments():
     for _ in range(CASES):
         kwargs = {}
         for key in ("trucks", "seed", "noise", "model", "k_mean", "speed_sd"):
-            if rng.random() < 0.5:
+            if rng.random() < 0.15:
                 kwargs[key] = random_value(rng)
         if "trucks" not in kwargs or rng.random() < 0.5:
             kwargs["trucks"] = int(rng.integers(1, 4))  # keep the successes small
@@ -93,16 +93,23 @@ def test_simulate_survives_random_arguments():
 def test_fit_survives_random_logs_and_options(base_log):
     rng = np.random.default_rng(1128)
     succeeded = 0
-    for _ in range(CASES):
+    for _ in range(CASES * 2 // 3):  # a third of them fit: the slowest entry point
         log = dict(base_log)
-        for key in ("truck_id", "speed_mps", "sprung_mass_kg", "impact_factor", "time_s", "class"):
+        if rng.random() < 0.8:  # one column changed
+            key = ["truck_id", "speed_mps", "sprung_mass_kg", "impact_factor", "time_s", "class"][int(rng.integers(0, 6))]
             r = rng.random()
             if r < 0.15:
                 log.pop(key, None)
-            elif r < 0.35:
+            elif r < 0.45:  # values edited in place: the reader's limits, NaN, infinities
+                numeric = key if key in ("speed_mps", "sprung_mass_kg", "impact_factor") else "speed_mps"
+                key = numeric
+                like = np.array(base_log[numeric], dtype=float, copy=True)
+                like.flat[int(rng.integers(0, like.size))] = [np.nan, np.inf, -1.0, 0.0, 1e7, 5.0, 1e-3][int(rng.integers(0, 7))]
+                log[key] = like
+            elif r < 0.85:
                 log[key] = random_array(rng, like=base_log.get(key) if key in base_log
                                         and isinstance(base_log[key], np.ndarray) else None)
-            elif r < 0.4:
+            else:
                 log[key] = random_value(rng)
         options = {"particles": 8, "final_sweeps": 0}
         if rng.random() < 0.3:
@@ -114,7 +121,7 @@ def test_fit_survives_random_logs_and_options(base_log):
             log = random_value(rng)
         if isinstance(log, str) and log:  # a path: leave files out of this test
             continue
-        if options.get("method") == "mcmc":
+        if isinstance(options.get("method"), str) and options["method"] == "mcmc":
             options.update(iterations=20, burn_in=5, thin=1, chains=2)
         if isinstance(options.get("runs"), int) and options["runs"] > 2:
             options["runs"] = 2
@@ -128,7 +135,7 @@ def test_predict_survives_random_arguments(posterior):
     for _ in range(CASES):
         kwargs = {"draws": 2, "trucks_per_draw": 1}
         for key in ("positions", "draws", "trucks_per_draw", "seed", "vehicle_class", "mix", "new_road"):
-            if rng.random() < 0.3:
+            if rng.random() < 0.12:
                 kwargs[key] = random_value(rng)
         if isinstance(kwargs["draws"], int) and kwargs["draws"] > 4:
             kwargs["draws"] = 4
