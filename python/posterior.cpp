@@ -1,4 +1,4 @@
-// fit, the posterior and predict: `ssrfleet fit` and `ssrfleet predict` as functions. The fit runs
+// fit, the posterior, predict and damage: `ssrfleet fit`, `predict` and `damage` as functions. The fit runs
 // the commands' own code (bin/fit_methods.hpp: fit_smc, fit_mcmc, FitFlags) class by class with
 // the classes' seeds, and the posterior file is written by the same functions as the command's, so
 // a seed gives the command's file to the byte.
@@ -17,11 +17,13 @@
 
 #include "bindings.hpp"
 #include "cli_common.hpp"
+#include "damage/damage_profile.hpp"
 #include "draws_output.hpp"
 #include "fit_methods.hpp"
 #include "fleet/equal_weight_draws.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/vehicle_classes.hpp"
+#include "io/damage_csv.hpp"
 #include "io/posterior_json.hpp"
 #include "io/wim_log.hpp"
 #include "model/fleet_model.hpp"
@@ -287,33 +289,53 @@ void write_draws(const PosteriorHandle& p, const std::string& path, const std::o
   cli::write_draws(path, cloud, extras);
 }
 
-// `ssrfleet predict`: positions checked as --positions is (finite, strictly increasing).
-py::dict predict(const PosteriorHandle& p, const SiteHandle& where, const std::vector<double>& positions, int draws,
-                 int trucks_per_draw, std::uint64_t seed, bool fixed_traffic, bool new_road,
-                 const std::optional<std::string>& label, const std::string& mix, const std::optional<std::string>& out) {
+// Where predict and damage look: positions checked as --positions is (finite, strictly
+// increasing); the classes and shares that vehicle_class / mix ask for, as the commands'
+// --class / --mix; the fitted site unless new_road.
+struct Selection {
+  fleet::ClassPosteriors classes;
+  std::vector<double> shares;
+};
+Selection select(const PosteriorHandle& p, const SiteHandle& where, const std::vector<double>& positions,
+                 bool new_road, const std::optional<std::string>& label, const std::string& mix) {
   for (std::size_t i = 0; i < positions.size(); ++i) {
     if (!std::isfinite(positions[i])) throw UsageError("positions[" + std::to_string(i) + "] is not a finite number");
     if (i > 0 && !(positions[i] > positions[i - 1])) {
       throw UsageError("positions[" + std::to_string(i) + "]: positions must be strictly increasing");
     }
   }
+  if (label && !mix.empty()) throw UsageError("give vehicle_class or mix, not both");
+  Selection s;
+  s.classes = p.classes;
+  if (fleet::unlabelled(s.classes) && (label || !mix.empty())) {
+    throw UsageError(std::string(label ? "vehicle_class" : "mix") + ": the posterior has no vehicle classes");
+  }
+  if (label) s.classes = fleet::select_class(s.classes, *label);
+  s.shares = fleet::class_shares(s.classes, fleet::parse_mix(mix, "mix"));
+  if (!new_road) {
+    cli::require_fitted_site(s.classes.front().cloud, "this posterior", *where.site,
+                             "; pass new_road=True to work on a different road on purpose");
+  }
+  return s;
+}
+
+py::array_t<double> array_of(const std::vector<double>& v) {
+  return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
+}
+
+// `ssrfleet predict`.
+py::dict predict(const PosteriorHandle& p, const SiteHandle& where, const std::vector<double>& positions, int draws,
+                 int trucks_per_draw, std::uint64_t seed, bool fixed_traffic, bool new_road,
+                 const std::optional<std::string>& label, const std::string& mix, const std::optional<std::string>& out) {
   predict::PredictionOptions options;
   options.theta_draws = draws;
   options.trucks_per_draw = trucks_per_draw;
   options.seed = seed;
   options.traffic_bootstrap = !fixed_traffic;
   options.validate();
-  if (label && !mix.empty()) throw UsageError("give vehicle_class or mix, not both");
-  fleet::ClassPosteriors classes = p.classes;
-  if (fleet::unlabelled(classes) && (label || !mix.empty())) {
-    throw UsageError(std::string(label ? "vehicle_class" : "mix") + ": the posterior has no vehicle classes");
-  }
-  if (label) classes = fleet::select_class(classes, *label);
-  const std::vector<double> shares = fleet::class_shares(classes, fleet::parse_mix(mix, "mix"));
-  if (!new_road) {
-    cli::require_fitted_site(classes.front().cloud, "this posterior", *where.site,
-                             "; pass new_road=True to predict for a different road on purpose");
-  }
+  const Selection s = select(p, where, positions, new_road, label, mix);
+  const fleet::ClassPosteriors& classes = s.classes;
+  const std::vector<double>& shares = s.shares;
   predict::SsrPrediction prediction;
   {
     py::gil_scoped_release release;
@@ -324,13 +346,56 @@ py::dict predict(const PosteriorHandle& p, const SiteHandle& where, const std::v
     return py::array_t<double>(static_cast<py::ssize_t>(a.size()), a.data());
   };
   py::dict result;
-  result["position_m"] = py::array_t<double>(static_cast<py::ssize_t>(prediction.position_m.size()),
-                                             prediction.position_m.data());
+  result["position_m"] = array_of(prediction.position_m);
   result["mean_if"] = array(prediction.mean_if);
   result["lower95"] = array(prediction.lower95);
   result["upper95"] = array(prediction.upper95);
   result["mean_lower95"] = array(prediction.mean_lower95);
   result["mean_upper95"] = array(prediction.mean_upper95);
+  return result;
+}
+
+// `ssrfleet damage`: the damage profile as arrays, each power n's amplification under the CSV's
+// column names (a1, a1_q025, a1_q975, a4, ...).
+py::dict damage(const PosteriorHandle& p, const SiteHandle& where, const std::vector<double>& positions,
+                const std::vector<double>& powers, double threshold, int draws, int trucks_per_draw, std::uint64_t seed,
+                bool fixed_traffic, bool new_road, const std::optional<std::string>& label, const std::string& mix,
+                const std::optional<std::string>& out) {
+  damage::DamageOptions options;
+  options.extra_powers = powers;
+  options.hot_spot_threshold = threshold;
+  options.theta_draws = draws;
+  options.trucks_per_draw = trucks_per_draw;
+  options.seed = seed;
+  options.traffic_bootstrap = !fixed_traffic;
+  options.validate();
+  const Selection s = select(p, where, positions, new_road, label, mix);
+  records::DamageProfile profile;
+  {
+    py::gil_scoped_release release;
+    profile = damage::predict_damage_mixture(s.classes, s.shares, *where.site, positions, options);
+    if (out) cli::write_output(*out, [&](std::ostream& os) { io::write_damage_csv(os, profile); });
+  }
+  py::dict result;
+  result["position_m"] = array_of(profile.position_m);
+  result["dlc"] = array_of(profile.dlc);
+  for (const auto& a : profile.powers) {
+    const std::string c = io::power_column(a.power);
+    result[py::str(c)] = array_of(a.mean);
+    result[py::str(c + "_q025")] = array_of(a.q025);
+    result[py::str(c + "_q975")] = array_of(a.q975);
+  }
+  py::array_t<bool> hot(static_cast<py::ssize_t>(profile.hot_spot.size()));
+  auto h = hot.mutable_unchecked<1>();
+  for (std::size_t m = 0; m < profile.hot_spot.size(); ++m) h(static_cast<py::ssize_t>(m)) = profile.hot_spot[m];
+  result["hot_spot"] = hot;
+  result["hot_spot_threshold"] = profile.hot_spot_threshold;
+  result["esal_per_million"] = array_of(profile.esal_per_million);
+  result["esal_per_million_q025"] = array_of(profile.esal_per_million_q025);
+  result["esal_per_million_q975"] = array_of(profile.esal_per_million_q975);
+  result["static_esal_per_million"] = profile.static_esal_per_million;
+  result["lift_off_passes"] = profile.lift_off_passes;
+  result["simulated_passes"] = profile.simulated_passes;
   return result;
 }
 
@@ -371,7 +436,10 @@ void bind_posterior(py::module_& m) {
       .def("write_draws", &write_draws, py::arg("path"), py::arg("vehicle_class") = py::none())
       .def("predict", &predict, py::arg("site"), py::arg("positions"), py::arg("draws"), py::arg("trucks_per_draw"),
            py::arg("seed"), py::arg("fixed_traffic"), py::arg("new_road"), py::arg("vehicle_class"), py::arg("mix"),
-           py::arg("out"));
+           py::arg("out"))
+      .def("damage", &damage, py::arg("site"), py::arg("positions"), py::arg("powers"), py::arg("threshold"),
+           py::arg("draws"), py::arg("trucks_per_draw"), py::arg("seed"), py::arg("fixed_traffic"), py::arg("new_road"),
+           py::arg("vehicle_class"), py::arg("mix"), py::arg("out"));
   m.def("_fit", &fit, py::arg("site"), py::arg("log_path"), py::arg("arrays"), py::arg("method"), py::arg("seed"),
         py::arg("options"));
   m.def("_read_posterior", &read_posterior, py::arg("path"));

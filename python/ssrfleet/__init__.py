@@ -318,6 +318,25 @@ class Posterior:
                                       None if out is None else _text("out", out))
         return _frame(result) if as_frame else result
 
+    def damage(self, positions=None, powers=(), threshold=1.1, draws=200, trucks_per_draw=100, seed=1, site=None,
+               new_road=False, fixed_traffic=False, vehicle_class=None, mix=None, out=None):
+        """The damage along the road, as `ssrfleet damage`: per position the DLC, the damage
+        amplification a_n = E[IF^n] for n = 1, 4 and any further `powers` (keys a1, a1_q025, a1_q975,
+        a4, ...), hot_spot (a_4's 95th percentile above `threshold`), ESAL per million trucks with its
+        95 % limits; and static_esal_per_million, lift_off_passes, simulated_passes. Arguments as predict;
+        out also writes the damage CSV (the command's bytes)."""
+        if site is None:
+            site = self._site
+        site = _site(site)
+        positions = [] if positions is None else _numbers("positions", positions, 1).tolist()
+        powers = _numbers("powers", list(powers) if isinstance(powers, tuple) else powers, 1).tolist()
+        return self._handle.damage(site._handle, positions, powers, _real("threshold", threshold),
+                                   _integer("draws", draws, 2, _INT_MAX),
+                                   _integer("trucks_per_draw", trucks_per_draw, 1, _INT_MAX), _seed(seed),
+                                   bool(fixed_traffic), bool(new_road),
+                                   None if vehicle_class is None else _text("vehicle_class", vehicle_class),
+                                   "" if mix is None else _mix_text(mix), None if out is None else _text("out", out))
+
     def __repr__(self):
         labels = self.vehicle_classes
         info = self._handle.info(labels[0]) if len(labels) == 1 else None

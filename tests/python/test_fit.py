@@ -180,3 +180,18 @@ def test_a_fit_releases_the_gil(small_log):
     # With the GIL held for the whole fit the loop would tick once or twice; released, up to once a
     # millisecond (a loaded machine's scheduler allows fewer: one tick per 20 ms is asked).
     assert elapsed > 0.05 and ticks > elapsed / 0.02
+
+
+def test_damage_matches_the_command(smc, cli, tmp_path):
+    expected, posterior = smc
+    cli_csv = tmp_path / "cli.csv"
+    cli("damage", "--posterior", expected, "--draws", 10, "--trucks-per-draw", 5, "--seed", 4, "--power", 2,
+        "--positions", "76,80,90", "--out", cli_csv, "-q")
+    mine_csv = tmp_path / "mine.csv"
+    result = posterior.damage(positions=[76.0, 80.0, 90.0], powers=[2.0], draws=10, trucks_per_draw=5, seed=4,
+                              out=mine_csv)
+    assert filecmp.cmp(mine_csv, cli_csv, shallow=False)
+    for key in ("dlc", "a1", "a4", "a4_q025", "a4_q975", "a2", "hot_spot", "esal_per_million"):
+        assert result[key].shape == (3,), key
+    assert (result["a4_q025"] <= result["a4_q975"]).all()
+    assert result["simulated_passes"] == 50

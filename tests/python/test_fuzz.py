@@ -1,4 +1,4 @@
-"""Random shapes, values and dtypes thrown at simulate, fit and predict: each call succeeds or raises
+"""Random shapes, values and dtypes thrown at simulate, fit, predict and damage: each call succeeds or raises
 a ValueError or TypeError (ssrfleet's own classes derive from them), never crashes the interpreter.
 Seeded, so a failure is repeatable; a few hundred cases in a few seconds."""
 
@@ -146,3 +146,10 @@ def test_predict_survives_random_arguments(posterior):
         result = call(posterior.predict, **kwargs)
         if result is not None:
             assert result["mean_if"].shape == result["position_m"].shape
+        if rng.random() < 0.3:
+            kwargs.pop("mix", None)
+            kwargs["powers"] = random_value(rng) if rng.random() < 0.5 else [float(rng.uniform(-1.0, 8.0))]
+            kwargs["threshold"] = random_value(rng) if rng.random() < 0.3 else 1.1
+            result = call(posterior.damage, **kwargs)
+            if result is not None:
+                assert result["a4"].shape == result["position_m"].shape
