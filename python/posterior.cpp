@@ -45,6 +45,7 @@ struct PosteriorHandle {
   std::shared_ptr<const site::Site> site;
   std::vector<records::WimRecord> records;
   std::uint64_t seed = 1;
+  std::string source = "the result of ssrfleet.fit()";  // a file's path: how messages name it
 };
 
 // The log given as arrays, checked by the very reader a log file goes through (the same limits,
@@ -179,6 +180,7 @@ std::shared_ptr<PosteriorHandle> read_posterior(const std::string& path) {
   auto out = std::make_shared<PosteriorHandle>();
   py::gil_scoped_release release;
   out->classes = io::read_posterior_classes(path);
+  out->source = path;
   return out;
 }
 
@@ -313,7 +315,7 @@ Selection select(const PosteriorHandle& p, const SiteHandle& where, const std::v
   if (label) s.classes = fleet::select_class(s.classes, *label);
   s.shares = fleet::class_shares(s.classes, fleet::parse_mix(mix, "mix"));
   if (!new_road) {
-    cli::require_fitted_site(s.classes.front().cloud, "this posterior", *where.site,
+    cli::require_fitted_site(s.classes.front().cloud, p.source, *where.site,
                              "; pass new_road=True to work on a different road on purpose");
   }
   return s;

@@ -195,3 +195,27 @@ def test_damage_matches_the_command(smc, cli, tmp_path):
         assert result[key].shape == (3,), key
     assert (result["a4_q025"] <= result["a4_q975"]).all()
     assert result["simulated_passes"] == 50
+
+
+def test_a_log_of_vehicle_classes_fits_as_the_command_does(cli, tmp_path):
+    log = tmp_path / "classes.csv"
+    cli("simulate", "--trucks", 10, "--seed", 8, "--fleet-mix", "A:share=0.5;B:share=0.5,k-mean=600e3", "--out", log,
+        "-q")
+    expected = tmp_path / "cli.json"
+    cli("fit", log, "--particles", 16, "--seed", 2, "--out", expected, "-q")
+    posterior = ssrfleet.fit(str(log), particles=16, seed=2)
+    mine = tmp_path / "mine.json"
+    posterior.to_json(mine)
+    assert filecmp.cmp(mine, expected, shallow=False)
+    assert posterior.vehicle_classes == ["A", "B"]
+    with pytest.raises(ssrfleet.UsageError, match="vehicle_class"):
+        posterior.summary()
+    assert list(posterior.summary(vehicle_class="B")) == HYPER
+    draws, _ = posterior.draws(vehicle_class="A")
+    assert draws.shape[2] == 7
+    cli_csv = tmp_path / "cli.csv"
+    cli("predict", "--posterior", expected, "--draws", 4, "--trucks-per-draw", 3, "--mix", "A=0.7,B=0.3", "--out",
+        cli_csv, "-q")
+    mine_csv = tmp_path / "mine.csv"
+    posterior.predict(draws=4, trucks_per_draw=3, mix={"A": 0.7, "B": 0.3}, out=mine_csv)
+    assert filecmp.cmp(mine_csv, cli_csv, shallow=False)
