@@ -45,16 +45,19 @@ void raise_data_error(const DataError& e) {
 
 void bind_errors(py::module_& m) {
   py::handle exception(PyExc_Exception);
-  g_error = new_class(m, "Error", py::make_tuple(exception), "Every error ssrfleet raises derives from this.");
+  g_error =
+      new_class(m, "Error", py::make_tuple(exception), "Every error ssrfleet raises derives from this.");
   py::handle base(g_error);
   g_usage = new_class(m, "UsageError", py::make_tuple(base, py::handle(PyExc_ValueError)),
                       "A bad argument value or a bad combination of arguments.");
-  g_data = new_class(m, "DataError", py::make_tuple(base, py::handle(PyExc_ValueError)),
-                     "Input data that is malformed or physically impossible. Attributes: file, line (0 when the "
-                     "format has no lines), field, reason.");
+  g_data =
+      new_class(m, "DataError", py::make_tuple(base, py::handle(PyExc_ValueError)),
+                "Input data that is malformed or physically impossible. Attributes: file, line (0 when the "
+                "format has no lines), field, reason.");
   g_missing = new_class(m, "MissingInputError", py::make_tuple(base, py::handle(PyExc_FileNotFoundError)),
                         "An input file that does not exist or cannot be opened.");
-  g_io = new_class(m, "IoError", py::make_tuple(base, py::handle(PyExc_OSError)), "Writing an output failed.");
+  g_io =
+      new_class(m, "IoError", py::make_tuple(base, py::handle(PyExc_OSError)), "Writing an output failed.");
   g_busy = new_class(m, "BusyError", py::make_tuple(base, py::handle(PyExc_RuntimeError)),
                      "A resource another process holds (a stream state in use): try again later.");
   g_numerical = new_class(m, "NumericalError", py::make_tuple(base, py::handle(PyExc_ArithmeticError)),

@@ -54,17 +54,23 @@ struct PosteriorHandle {
 // header is line 1, row r is line r + 2) and its field.
 std::vector<records::WimRecord> records_of_arrays(const std::vector<std::string>& truck_id,
                                                   const std::optional<py::array_t<double>>& time_s,
-                                                  const py::array_t<double>& speed, const py::array_t<double>& mass,
+                                                  const py::array_t<double>& speed,
+                                                  const py::array_t<double>& mass,
                                                   const py::array_t<double>& impact,
                                                   const std::optional<std::vector<std::string>>& classes,
                                                   const SiteHandle& where, const io::WimLimits& limits) {
   const auto n = static_cast<py::ssize_t>(truck_id.size());
   if (n < 1) throw DataError("log", 2, "truck_id", "the log holds no truck records");
-  if (speed.ndim() != 1 || speed.shape(0) != n) throw UsageError("log: speed_mps must hold one number per truck");
-  if (mass.ndim() != 1 || mass.shape(0) != n) throw UsageError("log: sprung_mass_kg must hold one number per truck");
-  if (time_s && (time_s->ndim() != 1 || time_s->shape(0) != n)) throw UsageError("log: time_s must hold one number per truck");
-  if (classes && static_cast<py::ssize_t>(classes->size()) != n) throw UsageError("log: class must hold one label per truck");
-  if (impact.ndim() != 2 || impact.shape(0) != n) throw UsageError("log: impact_factor must be (trucks, sensors)");
+  if (speed.ndim() != 1 || speed.shape(0) != n)
+    throw UsageError("log: speed_mps must hold one number per truck");
+  if (mass.ndim() != 1 || mass.shape(0) != n)
+    throw UsageError("log: sprung_mass_kg must hold one number per truck");
+  if (time_s && (time_s->ndim() != 1 || time_s->shape(0) != n))
+    throw UsageError("log: time_s must hold one number per truck");
+  if (classes && static_cast<py::ssize_t>(classes->size()) != n)
+    throw UsageError("log: class must hold one label per truck");
+  if (impact.ndim() != 2 || impact.shape(0) != n)
+    throw UsageError("log: impact_factor must be (trucks, sensors)");
   const py::ssize_t m = impact.shape(1);
   if (m != where.site->sensors()) {
     throw DataError("log", 1, "if_" + std::to_string(m),
@@ -98,7 +104,8 @@ std::vector<records::WimRecord> records_of_arrays(const std::vector<std::string>
     records.push_back(std::move(r));
   }
   if (static_cast<py::ssize_t>(records.size()) != n) {
-    throw DataError("log", 2, "truck_id", "the log's rows did not all read back (a truck id with a comma or a newline?)");
+    throw DataError("log", 2, "truck_id",
+                    "the log's rows did not all read back (a truck id with a comma or a newline?)");
   }
   return records;
 }
@@ -160,7 +167,8 @@ std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optiona
         t[0].cast<std::vector<std::string>>(),
         t[1].is_none() ? std::nullopt : std::optional<py::array_t<double>>(t[1].cast<py::array_t<double>>()),
         t[2].cast<py::array_t<double>>(), t[3].cast<py::array_t<double>>(), t[4].cast<py::array_t<double>>(),
-        t[5].is_none() ? std::nullopt : std::optional<std::vector<std::string>>(t[5].cast<std::vector<std::string>>()),
+        t[5].is_none() ? std::nullopt
+                       : std::optional<std::vector<std::string>>(t[5].cast<std::vector<std::string>>()),
         where, limits);
   }
   py::gil_scoped_release release;
@@ -168,9 +176,10 @@ std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optiona
   // fit_classes_to_file's loop (bin/fit_classes.cpp) without its file: each class with its seed.
   for (const auto& [label, class_records] : fleet::split_by_class(out->records)) {
     const std::uint64_t class_seed = fleet::class_seed(seed, label);
-    fleet::PosteriorCloud cloud = method == "smc"
-                                      ? cli::fit_smc(site, class_records, flags, class_seed, stream, model.extension.get())
-                                      : cli::fit_mcmc(site, class_records, flags, class_seed, stream, model.extension.get());
+    fleet::PosteriorCloud cloud =
+        method == "smc"
+            ? cli::fit_smc(site, class_records, flags, class_seed, stream, model.extension.get())
+            : cli::fit_mcmc(site, class_records, flags, class_seed, stream, model.extension.get());
     out->classes.push_back({label, std::move(cloud)});
   }
   return out;
@@ -194,7 +203,8 @@ const fleet::PosteriorCloud& cloud_of(const PosteriorHandle& p, const std::optio
   for (const auto& c : p.classes) {
     if (c.label == *label) return c.cloud;
   }
-  throw UsageError("vehicle_class '" + *label + "': the posterior's classes are " + fleet::list_labels(p.classes));
+  throw UsageError("vehicle_class '" + *label + "': the posterior's classes are " +
+                   fleet::list_labels(p.classes));
 }
 
 std::vector<std::string> parameter_names(const fleet::PosteriorCloud& cloud) {
@@ -301,7 +311,8 @@ struct Selection {
 Selection select(const PosteriorHandle& p, const SiteHandle& where, const std::vector<double>& positions,
                  bool new_road, const std::optional<std::string>& label, const std::string& mix) {
   for (std::size_t i = 0; i < positions.size(); ++i) {
-    if (!std::isfinite(positions[i])) throw UsageError("positions[" + std::to_string(i) + "] is not a finite number");
+    if (!std::isfinite(positions[i]))
+      throw UsageError("positions[" + std::to_string(i) + "] is not a finite number");
     if (i > 0 && !(positions[i] > positions[i - 1])) {
       throw UsageError("positions[" + std::to_string(i) + "]: positions must be strictly increasing");
     }
@@ -326,9 +337,10 @@ py::array_t<double> array_of(const std::vector<double>& v) {
 }
 
 // `ssrfleet predict`.
-py::dict predict(const PosteriorHandle& p, const SiteHandle& where, const std::vector<double>& positions, int draws,
-                 int trucks_per_draw, std::uint64_t seed, bool fixed_traffic, bool new_road,
-                 const std::optional<std::string>& label, const std::string& mix, const std::optional<std::string>& out) {
+py::dict predict(const PosteriorHandle& p, const SiteHandle& where, const std::vector<double>& positions,
+                 int draws, int trucks_per_draw, std::uint64_t seed, bool fixed_traffic, bool new_road,
+                 const std::optional<std::string>& label, const std::string& mix,
+                 const std::optional<std::string>& out) {
   predict::PredictionOptions options;
   options.theta_draws = draws;
   options.trucks_per_draw = trucks_per_draw;
@@ -342,7 +354,8 @@ py::dict predict(const PosteriorHandle& p, const SiteHandle& where, const std::v
   {
     py::gil_scoped_release release;
     prediction = predict::predict_ssr_mixture(classes, shares, *where.site, positions, options);
-    if (out) cli::write_output(*out, [&](std::ostream& os) { predict::write_prediction_csv(os, prediction); });
+    if (out)
+      cli::write_output(*out, [&](std::ostream& os) { predict::write_prediction_csv(os, prediction); });
   }
   const auto array = [](const Eigen::ArrayXd& a) {
     return py::array_t<double>(static_cast<py::ssize_t>(a.size()), a.data());
@@ -360,8 +373,9 @@ py::dict predict(const PosteriorHandle& p, const SiteHandle& where, const std::v
 // `ssrfleet damage`: the damage profile as arrays, each power n's amplification under the CSV's
 // column names (a1, a1_q025, a1_q975, a4, ...).
 py::dict damage(const PosteriorHandle& p, const SiteHandle& where, const std::vector<double>& positions,
-                const std::vector<double>& powers, double threshold, int draws, int trucks_per_draw, std::uint64_t seed,
-                bool fixed_traffic, bool new_road, const std::optional<std::string>& label, const std::string& mix,
+                const std::vector<double>& powers, double threshold, int draws, int trucks_per_draw,
+                std::uint64_t seed, bool fixed_traffic, bool new_road,
+                const std::optional<std::string>& label, const std::string& mix,
                 const std::optional<std::string>& out) {
   damage::DamageOptions options;
   options.extra_powers = powers;
@@ -389,7 +403,8 @@ py::dict damage(const PosteriorHandle& p, const SiteHandle& where, const std::ve
   }
   py::array_t<bool> hot(static_cast<py::ssize_t>(profile.hot_spot.size()));
   auto h = hot.mutable_unchecked<1>();
-  for (std::size_t m = 0; m < profile.hot_spot.size(); ++m) h(static_cast<py::ssize_t>(m)) = profile.hot_spot[m];
+  for (std::size_t m = 0; m < profile.hot_spot.size(); ++m)
+    h(static_cast<py::ssize_t>(m)) = profile.hot_spot[m];
   result["hot_spot"] = hot;
   result["hot_spot_threshold"] = profile.hot_spot_threshold;
   result["esal_per_million"] = array_of(profile.esal_per_million);
@@ -412,38 +427,39 @@ void bind_posterior(py::module_& m) {
                                return l;
                              })
       .def_property_readonly("has_fit_site", [](const PosteriorHandle& p) { return p.site != nullptr; })
-      .def("info",
-           [](const PosteriorHandle& p, const std::optional<std::string>& label) {
-             const fleet::PosteriorCloud& c = cloud_of(p, label);
-             py::dict d;
-             d["method"] = c.method;
-             d["model"] = c.model;
-             d["chains"] = c.chains;
-             d["trucks_seen"] = c.trucks_seen;
-             d["particles"] = c.theta.cols();
-             d["weight_ess"] = c.weight_ess;
-             d["min_ess"] = c.min_ess;
-             d["log_evidence"] = c.log_evidence;
-             d["road_name"] = c.road_name;
-             d["site_fingerprint"] = c.site_fingerprint;
-             d["sensors"] = c.sensors;
-             d["parameters"] = parameter_names(c);
-             return d;
-           },
-           py::arg("vehicle_class") = py::none())
+      .def(
+          "info",
+          [](const PosteriorHandle& p, const std::optional<std::string>& label) {
+            const fleet::PosteriorCloud& c = cloud_of(p, label);
+            py::dict d;
+            d["method"] = c.method;
+            d["model"] = c.model;
+            d["chains"] = c.chains;
+            d["trucks_seen"] = c.trucks_seen;
+            d["particles"] = c.theta.cols();
+            d["weight_ess"] = c.weight_ess;
+            d["min_ess"] = c.min_ess;
+            d["log_evidence"] = c.log_evidence;
+            d["road_name"] = c.road_name;
+            d["site_fingerprint"] = c.site_fingerprint;
+            d["sensors"] = c.sensors;
+            d["parameters"] = parameter_names(c);
+            return d;
+          },
+          py::arg("vehicle_class") = py::none())
       .def("summary", &summary, py::arg("vehicle_class") = py::none())
       .def("draws", &draws, py::arg("vehicle_class") = py::none())
       .def("convergence", &convergence, py::arg("vehicle_class") = py::none())
       .def("to_json", &to_json, py::arg("path"))
       .def("write_draws", &write_draws, py::arg("path"), py::arg("vehicle_class") = py::none())
-      .def("predict", &predict, py::arg("site"), py::arg("positions"), py::arg("draws"), py::arg("trucks_per_draw"),
-           py::arg("seed"), py::arg("fixed_traffic"), py::arg("new_road"), py::arg("vehicle_class"), py::arg("mix"),
-           py::arg("out"))
+      .def("predict", &predict, py::arg("site"), py::arg("positions"), py::arg("draws"),
+           py::arg("trucks_per_draw"), py::arg("seed"), py::arg("fixed_traffic"), py::arg("new_road"),
+           py::arg("vehicle_class"), py::arg("mix"), py::arg("out"))
       .def("damage", &damage, py::arg("site"), py::arg("positions"), py::arg("powers"), py::arg("threshold"),
-           py::arg("draws"), py::arg("trucks_per_draw"), py::arg("seed"), py::arg("fixed_traffic"), py::arg("new_road"),
-           py::arg("vehicle_class"), py::arg("mix"), py::arg("out"));
-  m.def("_fit", &fit, py::arg("site"), py::arg("log_path"), py::arg("arrays"), py::arg("method"), py::arg("seed"),
-        py::arg("options"));
+           py::arg("draws"), py::arg("trucks_per_draw"), py::arg("seed"), py::arg("fixed_traffic"),
+           py::arg("new_road"), py::arg("vehicle_class"), py::arg("mix"), py::arg("out"));
+  m.def("_fit", &fit, py::arg("site"), py::arg("log_path"), py::arg("arrays"), py::arg("method"),
+        py::arg("seed"), py::arg("options"));
   m.def("_read_posterior", &read_posterior, py::arg("path"));
 }
 

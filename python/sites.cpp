@@ -47,10 +47,11 @@ SiteHandle make_site(const RoadHandle& road, const std::string& sensors, double 
   return s;
 }
 
-py::dict simulate(const SiteHandle& where, long trucks, std::uint64_t seed, double noise, const std::string& model,
-                  const std::vector<double>& fleet) {
+py::dict simulate(const SiteHandle& where, long trucks, std::uint64_t seed, double noise,
+                  const std::string& model, const std::vector<double>& fleet) {
   if (trucks < 1 || trucks > kMaxSimulatedTrucks) {
-    throw UsageError("trucks=" + std::to_string(trucks) + ": must be between 1 and " + std::to_string(kMaxSimulatedTrucks));
+    throw UsageError("trucks=" + std::to_string(trucks) + ": must be between 1 and " +
+                     std::to_string(kMaxSimulatedTrucks));
   }
   if (!(noise >= 0.0)) throw UsageError("noise=" + std::to_string(noise) + ": must be >= 0");
   if (fleet.size() != 10) throw UsageError("the fleet distribution takes 10 numbers");
@@ -101,7 +102,8 @@ py::dict simulate(const SiteHandle& where, long trucks, std::uint64_t seed, doub
 }  // namespace
 
 void bind_sites(py::module_& m) {
-  py::class_<RoadHandle>(m, "Road", "A road surface: a preset (AS1, AS2, AS3) or a road file (CSV or OpenCRG).")
+  py::class_<RoadHandle>(m, "Road",
+                         "A road surface: a preset (AS1, AS2, AS3) or a road file (CSV or OpenCRG).")
       .def_property_readonly("name", [](const RoadHandle& r) { return r.surface->name; })
       .def_property_readonly("length_m", [](const RoadHandle& r) { return r.surface->length_m(); })
       .def("__repr__", [](const RoadHandle& r) { return "<ssrfleet.Road " + r.surface->name + ">"; });
@@ -110,20 +112,23 @@ void bind_sites(py::module_& m) {
   py::class_<SiteHandle>(m, "_Site")
       .def_property_readonly("road_name", [](const SiteHandle& s) { return s.site->surface().name; })
       .def_property_readonly("sensors", [](const SiteHandle& s) { return s.site->sensors(); })
-      .def_property_readonly("sensor_positions_m", [](const SiteHandle& s) {
-        const auto& p = s.site->sensor_positions_m();
-        return py::array_t<double>(static_cast<py::ssize_t>(p.size()), p.data());
-      })
+      .def_property_readonly("sensor_positions_m",
+                             [](const SiteHandle& s) {
+                               const auto& p = s.site->sensor_positions_m();
+                               return py::array_t<double>(static_cast<py::ssize_t>(p.size()), p.data());
+                             })
       .def_property_readonly("lateral_range_m",
-                             [](const SiteHandle& s) { return py::make_tuple(s.site->lateral_min_m(), s.site->lateral_max_m()); })
+                             [](const SiteHandle& s) {
+                               return py::make_tuple(s.site->lateral_min_m(), s.site->lateral_max_m());
+                             })
       .def_property_readonly("fingerprint", [](const SiteHandle& s) { return s.site->fingerprint(); })
       .def_property_readonly("sensor_spec", [](const SiteHandle& s) { return s.flags.sensors; })
       .def_property_readonly("envelopment_m", [](const SiteHandle& s) { return s.flags.envelopment_m; })
       .def_property_readonly("m1_kg", [](const SiteHandle& s) { return s.flags.m1_kg; })
       .def_property_readonly("cb_nspm", [](const SiteHandle& s) { return s.flags.cb_nspm; })
       .def_property_readonly("ct_nspm", [](const SiteHandle& s) { return s.flags.ct_nspm; });
-  m.def("_make_site", &make_site, py::arg("road"), py::arg("sensors"), py::arg("envelopment_m"), py::arg("m1_kg"),
-        py::arg("cb_nspm"), py::arg("ct_nspm"));
+  m.def("_make_site", &make_site, py::arg("road"), py::arg("sensors"), py::arg("envelopment_m"),
+        py::arg("m1_kg"), py::arg("cb_nspm"), py::arg("ct_nspm"));
   m.def("_simulate", &simulate, py::arg("site"), py::arg("trucks"), py::arg("seed"), py::arg("noise"),
         py::arg("model"), py::arg("fleet"));
 }
