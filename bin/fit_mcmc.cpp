@@ -17,7 +17,7 @@ void print_convergence(std::ostream& out, const fleet::PosteriorCloud& cloud) {
   out << "fit (mcmc): " << cloud.chains << " chains; R-hat, bulk-ESS, tail-ESS, MCSE of mean / q05 / q95:\n";
   bool unmixed = false;
   for (const auto& p : cloud.convergence) {
-    out << "  " << std::left << std::setw(10) << p.name << std::right << std::defaultfloat << std::setprecision(4)
+    out << "  " << std::left << std::setw(10) << p.name << std::right << std::fixed << std::setprecision(4)
         << " R-hat " << p.rhat << "  ESS " << std::fixed << std::setprecision(0) << p.ess_bulk << " / " << p.ess_tail
         << "  MCSE " << std::defaultfloat << std::setprecision(3) << p.mcse_mean << " / " << p.mcse_q05 << " / "
         << p.mcse_q95 << "\n";

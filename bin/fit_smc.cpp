@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <functional>
 
+#include <boost/math/distributions/chi_squared.hpp>
+
 #include "cli_common.hpp"
 #include "process_ranks.hpp"
 #include "fit_methods.hpp"
@@ -261,11 +263,16 @@ namespace {
 // The runs' diagnostics, one line a parameter (fleet/smc_runs.hpp). R-hat above 1.01 says the runs
 // disagree by more than a tenth of a posterior sd or so: more particles or final sweeps are needed.
 void print_run_convergence(std::ostream& out, const fleet::PosteriorCloud& cloud) {
-  out << "fit (smc): " << cloud.chains << " runs; R-hat, equivalent ESS, MCSE of mean / q05 / q95:\n";
+  // R runs give the scatter's square to a χ²(R - 1)/(R - 1) factor, and the ESS with it.
+  const double dof = static_cast<double>(cloud.chains - 1);
+  const boost::math::chi_squared chi2(dof);
+  out << "fit (smc): " << cloud.chains << " runs; R-hat, equivalent ESS, MCSE of mean / q05 / q95 (an equivalent "
+      << "ESS from " << cloud.chains << " runs is within x" << std::setprecision(2) << boost::math::quantile(chi2, 0.05) / dof
+      << " to x" << boost::math::quantile(chi2, 0.95) / dof << " of the true one, 90 %):\n";
   bool unmixed = false;
   for (const auto& p : cloud.convergence) {
-    out << "  " << std::left << std::setw(10) << p.name << std::right << std::defaultfloat << std::setprecision(4)
-        << " R-hat " << p.rhat << "  ESS " << std::fixed << std::setprecision(0) << p.ess_equivalent << "  MCSE "
+    out << "  " << std::left << std::setw(10) << p.name << std::right << std::fixed << std::setprecision(4)
+        << " R-hat " << p.rhat << "  ESS " << std::setprecision(0) << p.ess_equivalent << "  MCSE "
         << std::defaultfloat << std::setprecision(3) << p.mcse_mean << " / " << p.mcse_q05 << " / " << p.mcse_q95
         << "\n";
     unmixed = unmixed || p.rhat > 1.01;
