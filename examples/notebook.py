@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A researcher's session with ssrfleet, as a script (cells marked `# %%` open as a notebook in
+"""A researcher's analysis with ssrfleet, as a script (cells marked `# %%` open as a notebook in
 editors that know them).
 
     PYTHONPATH=build/python python3 examples/notebook.py [OUTDIR]

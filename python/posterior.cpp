@@ -335,6 +335,9 @@ Selection select(const PosteriorHandle& p, const SiteHandle& where, const std::v
 py::array_t<double> array_of(const std::vector<double>& v) {
   return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
 }
+py::array_t<double> array_of(const Eigen::ArrayXd& a) {
+  return py::array_t<double>(static_cast<py::ssize_t>(a.size()), a.data());
+}
 
 // `ssrfleet predict`.
 py::dict predict(const PosteriorHandle& p, const SiteHandle& where, const std::vector<double>& positions,
@@ -357,16 +360,13 @@ py::dict predict(const PosteriorHandle& p, const SiteHandle& where, const std::v
     if (out)
       cli::write_output(*out, [&](std::ostream& os) { predict::write_prediction_csv(os, prediction); });
   }
-  const auto array = [](const Eigen::ArrayXd& a) {
-    return py::array_t<double>(static_cast<py::ssize_t>(a.size()), a.data());
-  };
   py::dict result;
   result["position_m"] = array_of(prediction.position_m);
-  result["mean_if"] = array(prediction.mean_if);
-  result["lower95"] = array(prediction.lower95);
-  result["upper95"] = array(prediction.upper95);
-  result["mean_lower95"] = array(prediction.mean_lower95);
-  result["mean_upper95"] = array(prediction.mean_upper95);
+  result["mean_if"] = array_of(prediction.mean_if);
+  result["lower95"] = array_of(prediction.lower95);
+  result["upper95"] = array_of(prediction.upper95);
+  result["mean_lower95"] = array_of(prediction.mean_lower95);
+  result["mean_upper95"] = array_of(prediction.mean_upper95);
   return result;
 }
 
