@@ -13,5 +13,9 @@ void bind_errors(pybind11::module_& m);
 void bind_sites(pybind11::module_& m);
 // fit, the posterior, read_posterior and predict (posterior.cpp).
 void bind_posterior(pybind11::module_& m);
+// diagnose (diagnose.cpp).
+void bind_diagnose(pybind11::module_& m);
+// The stream over a state directory (stream.cpp).
+void bind_stream(pybind11::module_& m);
 
 }  // namespace ssrfleet::python

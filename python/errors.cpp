@@ -9,6 +9,7 @@
 
 #include "bindings.hpp"
 #include "util/errors.hpp"
+#include "util/stop_token.hpp"
 
 namespace py = pybind11;
 
@@ -77,6 +78,10 @@ void bind_errors(py::module_& m) {
       PyErr_SetString(g_busy, e.what());
     } catch (const NumericalError& e) {
       PyErr_SetString(g_numerical, e.what());
+    } catch (const util::Stopped&) {
+      // Only a call whose token was tripped stops, and the module trips one on a signal: the
+      // signal's own exception is raised then (stoppable.hpp); this is the fallback.
+      PyErr_SetNone(PyExc_KeyboardInterrupt);
     }
   });
 }

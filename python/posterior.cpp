@@ -20,6 +20,7 @@
 #include "damage/damage_profile.hpp"
 #include "draws_output.hpp"
 #include "fit_methods.hpp"
+#include "fit_sites.hpp"
 #include "fleet/equal_weight_draws.hpp"
 #include "fleet/posterior_summary.hpp"
 #include "fleet/vehicle_classes.hpp"
@@ -29,7 +30,10 @@
 #include "model/fleet_model.hpp"
 #include "model/model_spec.hpp"
 #include "predict/ssr_prediction.hpp"
+#include "log_arrays.hpp"
+#include "posterior_handle.hpp"
 #include "site_handle.hpp"
+#include "stoppable.hpp"
 #include "util/errors.hpp"
 
 namespace py = pybind11;
@@ -38,77 +42,6 @@ namespace ssrfleet::python {
 
 namespace {
 
-struct PosteriorHandle {
-  fleet::ClassPosteriors classes;
-  // What the fit had (a posterior read from a file has neither): the site predict defaults to, and
-  // the log the NetCDF draws carry as observed data.
-  std::shared_ptr<const site::Site> site;
-  std::vector<records::WimRecord> records;
-  std::uint64_t seed = 1;
-  std::string source = "the result of ssrfleet.fit()";  // a file's path: how messages name it
-};
-
-// The log given as arrays, checked by the very reader a log file goes through (the same limits,
-// the same DataError): the arrays are written as the WIM log CSV (full precision, so every number
-// reads back to its bits) and read again. A record's DataError names the file "log", its line (the
-// header is line 1, row r is line r + 2) and its field.
-std::vector<records::WimRecord> records_of_arrays(const std::vector<std::string>& truck_id,
-                                                  const std::optional<py::array_t<double>>& time_s,
-                                                  const py::array_t<double>& speed,
-                                                  const py::array_t<double>& mass,
-                                                  const py::array_t<double>& impact,
-                                                  const std::optional<std::vector<std::string>>& classes,
-                                                  const SiteHandle& where, const io::WimLimits& limits) {
-  const auto n = static_cast<py::ssize_t>(truck_id.size());
-  if (n < 1) throw DataError("log", 2, "truck_id", "the log holds no truck records");
-  if (speed.ndim() != 1 || speed.shape(0) != n)
-    throw UsageError("log: speed_mps must hold one number per truck");
-  if (mass.ndim() != 1 || mass.shape(0) != n)
-    throw UsageError("log: sprung_mass_kg must hold one number per truck");
-  if (time_s && (time_s->ndim() != 1 || time_s->shape(0) != n))
-    throw UsageError("log: time_s must hold one number per truck");
-  if (classes && static_cast<py::ssize_t>(classes->size()) != n)
-    throw UsageError("log: class must hold one label per truck");
-  if (impact.ndim() != 2 || impact.shape(0) != n)
-    throw UsageError("log: impact_factor must be (trucks, sensors)");
-  const py::ssize_t m = impact.shape(1);
-  if (m != where.site->sensors()) {
-    throw DataError("log", 1, "if_" + std::to_string(m),
-                    "the log has " + std::to_string(m) + " sensors but the site has " +
-                        std::to_string(where.site->sensors()) + " (sensors " + where.flags.sensors + ")");
-  }
-  std::vector<records::WimRecord> written(static_cast<std::size_t>(n));
-  const auto s = speed.unchecked<1>();
-  const auto w = mass.unchecked<1>();
-  const auto f = impact.unchecked<2>();
-  for (py::ssize_t i = 0; i < n; ++i) {
-    records::WimRecord& r = written[static_cast<std::size_t>(i)];
-    r.truck_id = truck_id[static_cast<std::size_t>(i)];
-    if (time_s) r.time_s = time_s->at(i);
-    r.speed_mps = s(i);
-    r.sprung_mass_kg = w(i);
-    r.impact_factor.resize(m);
-    for (py::ssize_t j = 0; j < m; ++j) r.impact_factor(j) = f(i, j);
-    if (classes) r.vehicle_class = (*classes)[static_cast<std::size_t>(i)];
-  }
-  std::stringstream csv;
-  io::write_wim_log(csv, written);
-  io::WimLogReader reader(csv, "log", where.site->options().unsprung_mass_kg, limits);
-  std::vector<records::WimRecord> records;
-  records::WimRecord r;
-  io::Rejection why;
-  for (;;) {
-    const auto status = reader.next(r, why);
-    if (status == io::WimLogReader::Status::end) break;
-    if (status == io::WimLogReader::Status::rejected) throw DataError("log", why.line, why.field, why.reason);
-    records.push_back(std::move(r));
-  }
-  if (static_cast<py::ssize_t>(records.size()) != n) {
-    throw DataError("log", 2, "truck_id",
-                    "the log's rows did not all read back (a truck id with a comma or a newline?)");
-  }
-  return records;
-}
 
 // An option given from Python: None leaves the command's default.
 template <typename T>
@@ -136,6 +69,11 @@ std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optiona
   take(options, "thin", flags.thin);
   const bool chains_given = take(options, "chains", flags.chains);
   const bool runs_given = take(options, "runs", flags.runs);
+  take(options, "checkpoint", flags.checkpoint_dir);
+  take(options, "checkpoint_every_s", flags.checkpoint_every_s);
+  take(options, "checkpoint_every_trucks", flags.checkpoint_every_trucks);
+  std::string manifest;
+  take(options, "sites", manifest);
   bool fhwa = false, progress = false;
   take(options, "fhwa_classes", fhwa);
   take(options, "progress", progress);
@@ -150,6 +88,28 @@ std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optiona
   if (method == "smc" && chains_given) {
     throw UsageError("chains are the batch MCMC's (method='mcmc'); the SMC's independent runs are runs");
   }
+  if (method == "mcmc" && !flags.checkpoint_dir.empty()) {
+    throw UsageError("checkpoint: checkpoints are the SMC's (a batch MCMC chain is not resumed); use method='smc'");
+  }
+  if (!manifest.empty()) {
+    // fit --sites MANIFEST: the command's own function writes the posterior file (here a file the
+    // package gives and reads back), so the posterior is the command's to the byte.
+    std::string out_path;
+    take(options, "sites_out", out_path);
+    io::WimLimits limits;
+    limits.fhwa_classes = fhwa;
+    cli::JointFitRequest request;
+    request.manifest_path = manifest;
+    request.out = out_path;
+    request.method = method;
+    request.seed = seed;
+    request.quiet = !progress;
+    run_stoppable([&](const util::StopToken&) { cli::fit_manifest_sites(request, flags, where.flags, limits); });
+    auto out = std::make_shared<PosteriorHandle>();
+    out->classes = io::read_posterior_classes(out_path);
+    out->seed = seed;
+    return out;
+  }
   const site::Site& site = *where.site;
   const fleet::ModelSpec model = fleet::parse_model_spec(flags.model, site);
   io::WimLimits limits;
@@ -158,30 +118,19 @@ std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optiona
   auto out = std::make_shared<PosteriorHandle>();
   out->site = where.site;
   out->seed = seed;
-  if (log_path) {
-    py::gil_scoped_release release;
-    out->records = cli::read_site_log(*log_path, site, where.flags, limits);
-  } else {
-    const auto t = arrays.cast<py::tuple>();
-    out->records = records_of_arrays(
-        t[0].cast<std::vector<std::string>>(),
-        t[1].is_none() ? std::nullopt : std::optional<py::array_t<double>>(t[1].cast<py::array_t<double>>()),
-        t[2].cast<py::array_t<double>>(), t[3].cast<py::array_t<double>>(), t[4].cast<py::array_t<double>>(),
-        t[5].is_none() ? std::nullopt
-                       : std::optional<std::vector<std::string>>(t[5].cast<std::vector<std::string>>()),
-        where, limits);
-  }
-  py::gil_scoped_release release;
+  if (!log_path) out->records = read_log_arrays(arrays.cast<py::tuple>(), where, limits);
   std::ostream* stream = progress ? &std::cerr : nullptr;
-  // fit_classes_to_file's loop (bin/fit_classes.cpp) without its file: each class with its seed.
-  for (const auto& [label, class_records] : fleet::split_by_class(out->records)) {
-    const std::uint64_t class_seed = fleet::class_seed(seed, label);
-    fleet::PosteriorCloud cloud =
-        method == "smc"
-            ? cli::fit_smc(site, class_records, flags, class_seed, stream, model.extension.get())
-            : cli::fit_mcmc(site, class_records, flags, class_seed, stream, model.extension.get());
-    out->classes.push_back({label, std::move(cloud)});
-  }
+  run_stoppable([&](const util::StopToken&) {
+    if (log_path) out->records = cli::read_site_log(*log_path, site, where.flags, limits);
+    // fit_classes_to_file's loop (bin/fit_classes.cpp) without its file: each class with its seed.
+    for (const auto& [label, class_records] : fleet::split_by_class(out->records)) {
+      const std::uint64_t class_seed = fleet::class_seed(seed, label);
+      fleet::PosteriorCloud cloud =
+          method == "smc" ? cli::fit_smc(site, class_records, flags, class_seed, stream, model.extension.get())
+                          : cli::fit_mcmc(site, class_records, flags, class_seed, stream, model.extension.get());
+      out->classes.push_back({label, std::move(cloud)});
+    }
+  });
   return out;
 }
 
@@ -297,8 +246,7 @@ void write_draws(const PosteriorHandle& p, const std::string& path, const std::o
     extras.site = p.site.get();
     extras.seed = p.seed;
   }
-  py::gil_scoped_release release;
-  cli::write_draws(path, cloud, extras);
+  run_stoppable([&](const util::StopToken&) { cli::write_draws(path, cloud, extras); });
 }
 
 // Where predict and damage look: positions checked as --positions is (finite, strictly
@@ -354,12 +302,11 @@ py::dict predict(const PosteriorHandle& p, const SiteHandle& where, const std::v
   const fleet::ClassPosteriors& classes = s.classes;
   const std::vector<double>& shares = s.shares;
   predict::SsrPrediction prediction;
-  {
-    py::gil_scoped_release release;
+  run_stoppable([&](const util::StopToken&) {
     prediction = predict::predict_ssr_mixture(classes, shares, *where.site, positions, options);
     if (out)
       cli::write_output(*out, [&](std::ostream& os) { predict::write_prediction_csv(os, prediction); });
-  }
+  });
   py::dict result;
   result["position_m"] = array_of(prediction.position_m);
   result["mean_if"] = array_of(prediction.mean_if);
@@ -387,11 +334,10 @@ py::dict damage(const PosteriorHandle& p, const SiteHandle& where, const std::ve
   options.validate();
   const Selection s = select(p, where, positions, new_road, label, mix);
   records::DamageProfile profile;
-  {
-    py::gil_scoped_release release;
+  run_stoppable([&](const util::StopToken&) {
     profile = damage::predict_damage_mixture(s.classes, s.shares, *where.site, positions, options);
     if (out) cli::write_output(*out, [&](std::ostream& os) { io::write_damage_csv(os, profile); });
-  }
+  });
   py::dict result;
   result["position_m"] = array_of(profile.position_m);
   result["dlc"] = array_of(profile.dlc);

@@ -11,6 +11,7 @@
 #include "fleet/vehicle_classes.hpp"
 #include "model/physical_effects.hpp"
 #include "util/errors.hpp"
+#include "util/stop_token.hpp"
 #include "util/quantile.hpp"
 #include "vehicle/quarter_car.hpp"
 
@@ -182,6 +183,7 @@ struct Simulated {
 
 Simulated simulate(const fleet::PosteriorCloud& posterior, const site::Site& site,
                    const vehicle::PassIntegrator& integrator, std::size_t n_pos, const DamageOptions& options) {
+  util::throw_if_stopped();
   boost::random::mt19937_64 engine(options.seed);
   fleet::PredictiveTraffic traffic;
   traffic.bootstrap = options.traffic_bootstrap;

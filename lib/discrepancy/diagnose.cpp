@@ -18,6 +18,7 @@
 #include "model/model_extension.hpp"
 #include "model/model_spec.hpp"
 #include "util/errors.hpp"
+#include "util/stop_token.hpp"
 
 namespace ssrfleet::discrepancy {
 
@@ -185,6 +186,7 @@ Round next_effect(const site::Site& site, const std::vector<records::WimRecord>&
   std::vector<std::size_t> supported_index;
   const std::string against = spec.empty() ? "the base model" : spec;
   for (const auto& name : names) {
+    util::throw_if_stopped();
     const auto alone = fleet::make_extension(name, site);
     CandidateResult c;
     c.name = name;

@@ -23,6 +23,7 @@
 #include "model/fleet_conditionals.hpp"
 #include "model/truncated_samplers.hpp"
 #include "util/errors.hpp"
+#include "util/stop_token.hpp"
 
 namespace ssrfleet::fleet {
 
@@ -207,6 +208,7 @@ BatchMcmcResult run_batch_mcmc(const site::Site& site, const std::vector<records
 
   int kept_index = 0;
   for (int it = 0; it < options.iterations; ++it) {
+    util::throw_if_stopped();
     if (it == options.burn_in) {
       ancillary_k.reset_counts();
       ancillary_kt.reset_counts();

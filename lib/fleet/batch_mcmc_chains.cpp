@@ -8,6 +8,7 @@
 
 #include "smc/rng.hpp"
 #include "util/errors.hpp"
+#include "util/stop_token.hpp"
 
 namespace ssrfleet::fleet {
 
@@ -48,7 +49,8 @@ std::vector<BatchMcmcResult> run_batch_mcmc_chains(const site::Site& site, const
       o.threads = threads / (last - first) + (c - first < threads % (last - first) ? 1 : 0);
       // Progress from the first chain alone: the chains run side by side.
       if (c != 0) o.progress = nullptr;
-      running.emplace_back([&, o, c] {
+      running.emplace_back([&, o, c, stop = util::current_stop_token()] {
+        const util::StopScope driver(stop);  // the chain's thread drives it: the caller's token
         try {
           out[static_cast<std::size_t>(c)] = run_batch_mcmc(site, records, o);
         } catch (...) {

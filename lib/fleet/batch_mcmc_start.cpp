@@ -10,6 +10,7 @@
 #include "model/truck_table.hpp"
 #include "smc/engine.hpp"
 #include "util/errors.hpp"
+#include "util/stop_token.hpp"
 
 namespace ssrfleet::fleet::detail {
 
@@ -64,8 +65,10 @@ ChainStart start_chain(const site::Site& site, const std::vector<records::WimRec
     search.kt_start_npm = kt0;
     const smc::ParallelFor fits(options.threads > 0 ? options.threads : smc::TemperedSampler::Options::default_threads());
     std::vector<int> fit_passes(static_cast<std::size_t>(N), 0);
+    const util::StopCheck stop_check;  // the driver's stop token (util/stop_token.hpp), seen by the workers
     fits(N, [&](Eigen::Index begin, Eigen::Index end) {
       for (Eigen::Index n = begin; n < end; ++n) {
+        stop_check();
         const auto& r = records[static_cast<std::size_t>(n)];
         const model::TruckFit f = model::fit_truck(site, r.speed_mps, r.sprung_mass_kg, r.impact_factor, search);
         x(n, kStiffness) = f.stiffness_npm;

@@ -13,6 +13,7 @@
 #include "model/physical_effects.hpp"
 #include "util/errors.hpp"
 #include "util/quantile.hpp"
+#include "util/stop_token.hpp"
 
 namespace ssrfleet::predict {
 
@@ -40,6 +41,7 @@ Simulated simulate(const fleet::PosteriorCloud& posterior, const site::Site& sit
     effects = std::make_unique<fleet::PhysicalEffects>(*model.extension, posterior.site_fingerprint == site.fingerprint());
   }
   const int R = options.theta_draws, T = options.trucks_per_draw;
+  util::throw_if_stopped();
 
   boost::random::mt19937_64 engine(options.seed);
   boost::random::normal_distribution<double> std_normal(0.0, 1.0);

@@ -10,6 +10,7 @@
 
 #include "smc/weights.hpp"
 #include "util/errors.hpp"
+#include "util/stop_token.hpp"
 
 namespace ssrfleet::smc {
 
@@ -121,6 +122,7 @@ StageSummary TemperedSampler::run_stage(TemperedModel& model, std::string_view l
   std::vector<int> runs_in_stage;  // per schedule entry (MoveSchedule::max_runs_per_stage)
   double phi = 0.0;
   for (int step = 0; phi < 1.0; ++step) {
+    util::throw_if_stopped();
     StepInfo info;
     info.step = step;
     const Eigen::ArrayXd W = log_weights_.exp();

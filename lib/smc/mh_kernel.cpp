@@ -10,6 +10,7 @@
 #include <boost/random/normal_distribution.hpp>
 
 #include "util/errors.hpp"
+#include "util/stop_token.hpp"
 
 namespace ssrfleet::smc {
 
@@ -283,6 +284,7 @@ MhSummary run_sweeps(TemperedModel& model, double phi, const Eigen::Ref<const Ei
   std::vector<double> rw_sum(nb, 0.0), ind_sum(nb, 0.0);
   std::vector<int> rw_runs(nb, 0), ind_runs(nb, 0);
   for (int sweep = 0; sweep < max_sweeps; ++sweep) {
+    util::throw_if_stopped();
     for (std::size_t e = 0; e < ns;) {
       if (schedule.sweep[e].kind == MoveKind::kModel) {
         MoveRecord& r = summary.moves[record_of[e].front()];

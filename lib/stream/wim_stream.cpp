@@ -18,6 +18,7 @@
 #include "util/free_memory.hpp"
 #include "util/binary_io.hpp"
 #include "util/errors.hpp"
+#include "util/stop_token.hpp"
 
 namespace ssrfleet::stream {
 
@@ -348,7 +349,7 @@ StreamCounts WimStream::run(std::istream& in, const std::string& source, const s
   io::Rejection why;
   long reported_at = -1;  // the truck count of the last --report-every report
   for (;;) {
-    if (stop.load()) break;
+    if (stop.load() || util::stop_requested()) break;  // after the record in hand, its state saved
     const auto status = reader.next(record, why);
     if (status == io::WimLogReader::Status::end) {
       if (!options_.follow || stop.load()) break;

@@ -1,15 +1,18 @@
-"""ssrfleet from Python: roads, sites, simulate, fit, posteriors and SSR prediction.
+"""ssrfleet from Python: roads, sites, simulate, fit, posteriors, SSR prediction, diagnose and streams.
 
 The compiled part (ssrfleet._core) runs the library and the commands' own code, so a seed gives the
 numbers `ssrfleet simulate`, `ssrfleet fit` and `ssrfleet predict` give. This file checks the
 arguments (a wrong shape, dtype or a NaN is a ValueError or TypeError naming the argument, the row
-and the column) and converts to and from numpy arrays and pandas DataFrames. docs/python.md is the
-guide.
+and the column) and converts to and from numpy arrays and pandas DataFrames. The long calls (fit,
+diagnose, predict, damage, Stream.push) run with the GIL released and end within a second of Ctrl-C
+with KeyboardInterrupt. docs/python.md is the guide.
 """
 
+import json as _json
 import math
 import operator
 import os
+import re
 
 import numpy as _np
 
@@ -17,7 +20,8 @@ from . import _core
 from ._core import (BusyError, DataError, Error, IoError, MissingInputError, NumericalError, Road,
                     UsageError, __version__)
 
-__all__ = ["road", "Site", "simulate", "fit", "read_posterior", "Posterior", "Road", "Error", "UsageError",
+__all__ = ["road", "Site", "simulate", "fit", "read_posterior", "Posterior", "diagnose", "Diagnosis", "Stream",
+           "Road", "Error", "UsageError",
            "DataError", "MissingInputError", "IoError", "BusyError", "NumericalError", "__version__"]
 
 # The fleet distribution's defaults (the paper's Table 1), as `ssrfleet simulate` has them.
@@ -64,8 +68,8 @@ def _seed(value, name="seed"):
     return _integer(name, value, 0, _SEED_MAX)
 
 
-def _numbers(name, value, ndim):
-    """A float64 array of `ndim` dimensions holding finite numbers only."""
+def _numbers(name, value, ndim, finite=True):
+    """A float64 array of `ndim` dimensions holding finite numbers only (finite=False: NaN and inf pass)."""
     try:
         array = _np.asarray(value)
     except Exception as e:  # a ragged list, an object numpy cannot take
@@ -81,7 +85,7 @@ def _numbers(name, value, ndim):
         raise ValueError(f"{name}: expected {ndim} dimension(s), got shape {array.shape}")
     array = _np.ascontiguousarray(array, dtype=_np.float64)
     bad = ~_np.isfinite(array)
-    if bad.any():
+    if finite and bad.any():
         where = tuple(int(i) for i in _np.argwhere(bad)[0])
         at = f"row {where[0]}" if ndim == 1 else f"row {where[0]}, column {where[1]}"
         raise ValueError(f"{name}: {at} is {array[where]!r}, not a finite number")
@@ -112,37 +116,38 @@ def _labels(name, value, n):
     return out
 
 
-def _log_arrays(log):
-    """A log given as arrays: a dict like simulate()'s, or a DataFrame with the log file's columns."""
+def _log_arrays(log, finite=True, name="log"):
+    """A log given as arrays: a dict like simulate()'s, or a DataFrame with the log file's columns.
+    finite=False lets NaN and inf through (a stream quarantines such a record, as it does in a file)."""
     if hasattr(log, "columns") and hasattr(log, "to_numpy"):  # a pandas DataFrame
         columns = [str(c) for c in log.columns]
         sensors = sorted((int(c[3:]) for c in columns if c.startswith("if_") and c[3:].isdigit()))
         if not sensors or sensors != list(range(1, len(sensors) + 1)):
-            raise ValueError("log: a DataFrame needs the columns if_1..if_M (M the site's sensors)")
+            raise ValueError(f"{name}: a DataFrame needs the columns if_1..if_M (M the site's sensors)")
         get = {c: log[c].to_numpy() for c in ("truck_id", "speed_mps", "sprung_mass_kg", "time_s", "class")
                if c in columns}
         get["impact_factor"] = log[[f"if_{j}" for j in sensors]].to_numpy()
     elif isinstance(log, dict):
         get = log
     else:
-        raise TypeError(f"log: expected a path, a dict of arrays or a DataFrame, not {type(log).__name__}")
+        raise TypeError(f"{name}: expected a path, a dict of arrays or a DataFrame, not {type(log).__name__}")
     for key in ("truck_id", "speed_mps", "sprung_mass_kg", "impact_factor"):
         if key not in get:
-            raise ValueError(f"log: missing {key!r}")
-    impact = _numbers("log['impact_factor']", get["impact_factor"], 2)
+            raise ValueError(f"{name}: missing {key!r}")
+    impact = _numbers(f"{name}['impact_factor']", get["impact_factor"], 2, finite)
     n = impact.shape[0]
     if n == 0:
-        raise ValueError("log: no trucks")
-    truck_id = _labels("log['truck_id']", get["truck_id"], n)
+        raise ValueError(f"{name}: no trucks")
+    truck_id = _labels(f"{name}['truck_id']", get["truck_id"], n)
     arrays = {}
     for key in ("speed_mps", "sprung_mass_kg", "time_s"):
         if key in get and get[key] is not None:
-            arrays[key] = _numbers(f"log[{key!r}]", get[key], 1)
+            arrays[key] = _numbers(f"{name}[{key!r}]", get[key], 1, finite)
             if arrays[key].shape[0] != n:
-                raise ValueError(f"log[{key!r}]: {arrays[key].shape[0]} rows for {n} trucks (impact_factor's rows)")
+                raise ValueError(f"{name}[{key!r}]: {arrays[key].shape[0]} rows for {n} trucks (impact_factor's rows)")
     classes = None
     if "class" in get and get["class"] is not None:
-        classes = _labels("log['class']", get["class"], n)
+        classes = _labels(f"{name}['class']", get["class"], n)
     return (truck_id, arrays.get("time_s"), arrays["speed_mps"], arrays["sprung_mass_kg"], impact, classes)
 
 
@@ -361,15 +366,21 @@ _FIT_INTS = {"particles": (2, 10_000_000), "runs": (1, 64), "chains": (1, _INT_M
              "window": (0, _LONG_MAX)}
 
 
-def fit(log, site=None, method="smc", model="base", seed=1, particles=None, runs=None, chains=None,
+def fit(log=None, site=None, method="smc", model="base", seed=1, particles=None, runs=None, chains=None,
         iterations=None, burn_in=None, thin=None, threads=0, core=None, final_sweeps=None, cess=None,
-        max_sweeps=None, older_sweeps=None, window=None, fhwa_classes=False, progress=False):
+        max_sweeps=None, older_sweeps=None, window=None, fhwa_classes=False, progress=False, checkpoint=None,
+        checkpoint_every_s=None, checkpoint_every_trucks=None, sites=None):
     """Fit a WIM log, as `ssrfleet fit` (the same posterior, to the byte, for the same seed).
 
     log: a path to a log file, or arrays: a dict like simulate()'s output or a DataFrame with the log
     file's columns. An option left at None keeps the command's default (particles 1024; MCMC:
     chains 4, iterations 20000, burn_in 5000, thin 10). threads=0: all cores (the result does not
     depend on it). progress=True: the command's progress lines on standard error.
+    checkpoint: a folder for the SMC's checkpoints (fit --checkpoint): a fit stopped (Ctrl-C, a crash)
+    resumes there when called again with the same arguments, every checkpoint_every_s seconds
+    (default 600) or checkpoint_every_trucks trucks.
+    sites: a site manifest (fit --sites): one fleet posterior from all its sites' logs (log=None; the
+    site argument gives only the vehicle constants, each site its own road and sensors).
     """
     site = _site(site)
     options = {"model": _text("model", model), "fhwa_classes": bool(fhwa_classes), "progress": bool(progress)}
@@ -384,8 +395,24 @@ def fit(log, site=None, method="smc", model="base", seed=1, particles=None, runs
         options["cess"] = _real("cess", cess)
     if core is not None:
         options["core"] = _text("core", core)
+    if checkpoint is not None:
+        options["checkpoint"] = _text("checkpoint", checkpoint)
+    if checkpoint_every_s is not None:
+        options["checkpoint_every_s"] = _real("checkpoint_every_s", checkpoint_every_s)
+    if checkpoint_every_trucks is not None:
+        options["checkpoint_every_trucks"] = _integer("checkpoint_every_trucks", checkpoint_every_trucks, 0, _LONG_MAX)
     method = _text("method", method)
     seed = _seed(seed)
+    if sites is not None:
+        if log is not None:
+            raise UsageError("give log or sites, not both (a manifest names each site's log)")
+        import tempfile
+        options["sites"] = _text("sites", sites)
+        with tempfile.TemporaryDirectory(prefix="ssrfleet-sites-") as folder:
+            options["sites_out"] = os.path.join(folder, "posterior.json")
+            return Posterior(_core._fit(site._handle, None, None, method, seed, options), None)
+    if log is None:
+        raise UsageError("fit needs a log (a path or arrays), or sites=MANIFEST")
     if isinstance(log, (str, os.PathLike)):
         handle = _core._fit(site._handle, _text("log", log), None, method, seed, options)
     else:
@@ -401,3 +428,199 @@ def fit(log, site=None, method="smc", model="base", seed=1, particles=None, runs
 def read_posterior(path):
     """A posterior file that fit writes (or a stream's state directory)."""
     return Posterior(_core._read_posterior(_text("path", path)))
+
+
+# --- diagnose ----------------------------------------------------------------------------------
+
+class Diagnosis(dict):
+    """diagnose()'s report: the JSON report `ssrfleet diagnose --json` writes, as a dict (checks_before,
+    checks_after, candidates with their log_bayes_factor and heldout_gain, effect, model, parameters
+    with their intervals, verdict, ...), with the posterior diagnose ends with as .posterior."""
+
+    def __init__(self, report, posterior):
+        super().__init__(report)
+        self.posterior = posterior
+
+    def __repr__(self):
+        return f"<ssrfleet.Diagnosis model {self.get('model')!r}: {self.get('verdict')}>"
+
+
+_DIAGNOSE_INTS = {"particles": (2, 10_000_000), "threads": (0, _INT_MAX), "max_effects": (0, _INT_MAX),
+                  "draws": (1, _INT_MAX)}
+
+
+def diagnose(log, site=None, seed=1, particles=None, threads=0, alpha=None, min_log_bf=None, holdout=None,
+             candidates=None, max_effects=None, shortlist_only=False, refit_from_prior=False, draws=None,
+             json=None, out=None, posterior_out=None, plots=False, progress=False):
+    """Diagnose a WIM log, as `ssrfleet diagnose` (the same report for the same seed): run the posterior
+    predictive checks, refit with each candidate effect, and keep the one the evidence and the held-out
+    skill support. Returns a Diagnosis (a dict of the JSON report, with .posterior).
+
+    log: a path or arrays, as fit takes it. An option left at None keeps the command's default
+    (particles 512, alpha 0.01, min_log_bf 3, holdout 0.25, draws 200, max_effects 3, every candidate).
+    candidates: effect names (a list or "a,b"). json / posterior_out: also write the command's JSON
+    report / posterior file there; out: the command's report folder (plots=True runs gnuplot there).
+    """
+    site = _site(site)
+    options = {"shortlist_only": bool(shortlist_only), "refit_from_prior": bool(refit_from_prior),
+               "progress": bool(progress)}
+    for key, value in (("particles", particles), ("threads", threads), ("max_effects", max_effects),
+                       ("draws", draws)):
+        if value is not None:
+            low, high = _DIAGNOSE_INTS[key]
+            options[key] = _integer(key, value, low, high)
+    for key, value in (("alpha", alpha), ("min_log_bf", min_log_bf), ("holdout", holdout)):
+        if value is not None:
+            options[key] = _real(key, value)
+    if candidates is not None:
+        if isinstance(candidates, (str, os.PathLike)):
+            candidates = [c for c in _text("candidates", candidates).split(",") if c]
+        try:
+            candidates = list(candidates)
+        except TypeError:
+            raise TypeError(f"candidates: expected effect names, not {type(candidates).__name__}") from None
+        options["candidates"] = [_text(f"candidates[{i}]", c) for i, c in enumerate(candidates)]
+    paths = [None if p is None else _text(name, p) for name, p in
+             (("json", json), ("out", out), ("posterior_out", posterior_out))]
+    seed = _seed(seed)
+    if isinstance(log, (str, os.PathLike)):
+        report, handle = _core._diagnose(site._handle, _text("log", log), None, seed, options, *paths, bool(plots))
+    else:
+        arrays = _log_arrays(log)
+        try:
+            report, handle = _core._diagnose(site._handle, None, arrays, seed, options, *paths, bool(plots))
+        except DataError as e:
+            e.row = e.line - 2 if e.line >= 2 else None
+            raise
+    return Diagnosis(_json.loads(report), Posterior(handle, site))
+
+
+# --- streams -----------------------------------------------------------------------------------
+
+_REJECT = re.compile(r"^# line (\d+): ([^:]*): (.*)$")
+_pushes = 0  # arrays pushed by this process: each push's input is named apart (see Stream.push)
+
+
+def _lock_holder(state_dir):
+    """The process id the state's lock file names (its holder wrote it), or None."""
+    try:
+        with open(os.path.join(state_dir, "lock")) as f:
+            return int(f.read().strip())
+    except (OSError, ValueError):
+        return None
+
+
+def _new_rejects(path, offset):
+    """The records rejects.csv gained after `offset` bytes: line, field, reason and the record's text."""
+    try:
+        with open(path, "rb") as f:
+            f.seek(offset)
+            text = f.read().decode("utf-8", "replace")
+    except FileNotFoundError:
+        return []
+    out, lines = [], text.split("\n")
+    for i, line in enumerate(lines):
+        m = _REJECT.match(line)
+        if m and i + 1 < len(lines):
+            out.append({"line": int(m.group(1)), "field": m.group(2), "reason": m.group(3), "record": lines[i + 1]})
+    return out
+
+
+class Stream:
+    """A stream over a state directory, as `ssrfleet stream --state DIR`: records pushed are absorbed
+    into the fleet posterior one by one, the state saved after each; bad records are quarantined in
+    DIR/rejects.csv. The state is the command's: either resumes the other, to the same posterior.
+
+    One writer per state: a state another process (or another Stream) holds raises BusyError, with
+    the attributes state_dir and pid. close() (or leaving a `with` block) releases it. The options
+    are the command's (--model, --seed, --particles, --threads, --window, --classes, --fhwa-classes,
+    --tables-in-memory); a resume must give the seed and model the state was made with.
+    """
+
+    def __init__(self, state_dir, site=None, model="base", seed=1, particles=1024, threads=0, window=0,
+                 classes=None, fhwa_classes=False, tables_in_memory=False, progress=False):
+        self._site = _site(site)
+        self.state_dir = _text("state_dir", state_dir)
+        options = {"model": _text("model", model), "particles": _integer("particles", particles, 2, 10_000_000),
+                   "threads": _integer("threads", threads, 0, _INT_MAX),
+                   "window": _integer("window", window, 0, _LONG_MAX), "fhwa_classes": bool(fhwa_classes),
+                   "tables_in_memory": bool(tables_in_memory), "progress": bool(progress)}
+        if classes is not None:
+            if isinstance(classes, str):
+                classes = [c for c in classes.split(",")]
+            options["classes"] = [_text(f"classes[{i}]", c) for i, c in enumerate(classes)]
+            if not options["classes"]:
+                raise UsageError("classes: no class labels")
+        try:
+            self._handle = _core._open_stream(self._site._handle, self.state_dir, _seed(seed), options)
+        except BusyError as e:
+            e.state_dir = self.state_dir
+            e.pid = _lock_holder(self.state_dir)
+            raise
+
+    @property
+    def resumed(self):
+        """Whether the state held a checkpoint when the Stream opened it."""
+        return self._handle.resumed
+
+    @property
+    def warning(self):
+        """What to know about the posterior's quality ("" if nothing)."""
+        return self._handle.warning
+
+    @property
+    def closed(self):
+        return self._handle.closed
+
+    def push(self, records):
+        """Absorb records: a path to a WIM log, or arrays as fit takes them (simulate()'s dict, a
+        DataFrame). Returns a dict: absorbed, rejected, skipped (already in the posterior: a truck id
+        absorbed before), total_absorbed, and rejects, one dict per quarantined record (line, field,
+        reason, record: its text; for arrays also row, counted from 0).
+
+        A bad record (a NaN, a value out of range, a repeated truck id) is quarantined as the command
+        quarantines it, not raised; arrays of a wrong shape or type raise ValueError / TypeError.
+        Ctrl-C ends the push after the record in hand, its state saved, and raises KeyboardInterrupt;
+        pushing the same records again goes on where it stopped."""
+        rejects_path = os.path.join(self.state_dir, "rejects.csv")
+        offset = os.path.getsize(rejects_path) if os.path.exists(rejects_path) else 0
+        if isinstance(records, (str, os.PathLike)):
+            counts = self._handle.push_file(_text("records", records))
+            counts["rejects"] = _new_rejects(rejects_path, offset)
+            return counts
+        global _pushes
+        arrays = _log_arrays(records, finite=False, name="records")
+        _pushes += 1
+        # The input's name goes into the checkpoint; a resume skips lines by number only on an input
+        # of the same name, which arrays must never match: each push is named apart.
+        source = f"<arrays pushed by process {os.getpid()}, push {_pushes}>"
+        counts = self._handle.push_arrays(arrays, self._site._handle, source)
+        rejects = _new_rejects(rejects_path, offset)
+        for r in rejects:
+            r["row"] = r["line"] - 2
+        counts["rejects"] = rejects
+        return counts
+
+    def posterior(self):
+        """The posterior now (the state's posterior.json), as fit returns it."""
+        if not os.path.exists(os.path.join(self.state_dir, "posterior.json")):
+            raise UsageError(f"the stream in '{self.state_dir}' has absorbed no truck yet: no posterior")
+        return Posterior(_core._read_posterior(self.state_dir), self._site)
+
+    def predict(self, positions=None, **options):
+        """The SSR prediction from the posterior now: Posterior.predict's arguments."""
+        return self.posterior().predict(positions, **options)
+
+    def close(self):
+        """Release the state (its lock): another process may stream into it then."""
+        self._handle.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+    def __repr__(self):
+        return f"<ssrfleet.Stream on {self.state_dir!r}{' (closed)' if self.closed else ''}>"

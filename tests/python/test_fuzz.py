@@ -1,6 +1,7 @@
-"""Random shapes, values and dtypes thrown at simulate, fit, predict and damage: each call succeeds or raises
-a ValueError or TypeError (ssrfleet's own classes derive from them), never crashes the interpreter.
-Seeded, so a failure is repeatable; a few hundred cases in a few seconds."""
+"""Random shapes, values and dtypes thrown at simulate, fit, predict, damage, Stream.push and diagnose:
+each call succeeds or raises a ValueError or TypeError (ssrfleet's own classes derive from them),
+never crashes the interpreter. Seeded, so a failure is repeatable; a few hundred cases in a few
+seconds."""
 
 import numpy as np
 import pytest
@@ -153,3 +154,69 @@ def test_predict_survives_random_arguments(posterior):
             result = call(posterior.damage, **kwargs)
             if result is not None:
                 assert result["a4"].shape == result["position_m"].shape
+
+
+def random_log(rng, base_log):
+    """base_log with one column changed (dropped, edited, replaced), or something else altogether."""
+    log = dict(base_log)
+    key = ["truck_id", "speed_mps", "sprung_mass_kg", "impact_factor", "time_s", "class"][int(rng.integers(0, 6))]
+    r = rng.random()
+    if r < 0.15:
+        log.pop(key, None)
+    elif r < 0.45:
+        numeric = key if key in ("speed_mps", "sprung_mass_kg", "impact_factor") else "impact_factor"
+        like = np.array(base_log[numeric], dtype=float, copy=True)
+        like.flat[int(rng.integers(0, like.size))] = [np.nan, np.inf, -1.0, 0.0, 1e7, 5.0, 1e-3][int(rng.integers(0, 7))]
+        log[numeric] = like
+    elif r < 0.85:
+        log[key] = random_array(rng, like=base_log.get(key) if key in base_log
+                                and isinstance(base_log[key], np.ndarray) else None)
+    else:
+        log[key] = random_value(rng)
+    if rng.random() < 0.1:
+        log = random_value(rng)
+    return log
+
+
+def test_stream_push_survives_random_records(base_log, tmp_path):
+    """A bad value in a record is quarantined (as the command does), a bad shape or type raised; the
+    stream's counts always add up, and it goes on taking records."""
+    rng = np.random.default_rng(112826)
+    with ssrfleet.Stream(tmp_path / "state", particles=8, seed=1) as stream:
+        for i in range(CASES // 3):
+            log = random_log(rng, base_log)
+            if isinstance(log, str) and log:  # a path: leave files out of this test
+                continue
+            if isinstance(log, dict) and isinstance(log.get("truck_id"), np.ndarray) and log["truck_id"].dtype.kind == "U":
+                log["truck_id"] = np.char.add(log["truck_id"], f"-{i}")  # new trucks each time, so some are absorbed
+            counts = call(stream.push, log)
+            if counts is not None:
+                assert counts["absorbed"] + counts["rejected"] + counts["skipped"] >= 1
+                assert counts["rejected"] == len(counts["rejects"])
+        total = stream.push({k: base_log[k] for k in ("truck_id", "speed_mps", "sprung_mass_kg", "impact_factor")})
+        assert total["total_absorbed"] >= 3
+
+
+def test_diagnose_survives_random_arguments(base_log):
+    rng = np.random.default_rng(2811)
+    succeeded = 0
+    for _ in range(CASES // 5):
+        log = random_log(rng, base_log) if rng.random() < 0.7 else base_log
+        if isinstance(log, str) and log:
+            continue
+        options = {"particles": 8, "draws": 2, "candidates": ["sensor_gain"], "max_effects": 0}
+        for key in ("particles", "seed", "alpha", "min_log_bf", "holdout", "candidates", "max_effects", "draws",
+                    "threads"):
+            if rng.random() < 0.12:
+                options[key] = random_value(rng)
+        if isinstance(options["particles"], int) and options["particles"] > 8:
+            options["particles"] = 8
+        if isinstance(options["draws"], int) and options["draws"] > 4:
+            options["draws"] = 4
+        if options["candidates"] is None:  # every effect: too slow for this test
+            options["candidates"] = ["sensor_gain"]
+        result = call(ssrfleet.diagnose, log, **options)
+        if result is not None:
+            assert "verdict" in result and result.posterior.info()["trucks_seen"] >= 1
+            succeeded += 1
+    assert succeeded > 0
