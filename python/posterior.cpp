@@ -3,6 +3,8 @@
 // the classes' seeds, and the posterior file is written by the same functions as the command's, so
 // a seed gives the command's file to the byte.
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -108,6 +110,8 @@ std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optiona
     auto out = std::make_shared<PosteriorHandle>();
     out->classes = io::read_posterior_classes(out_path);
     out->seed = seed;
+    std::ifstream written(out_path, std::ios::binary);
+    out->file_text.assign(std::istreambuf_iterator<char>(written), std::istreambuf_iterator<char>());
     return out;
   }
   const site::Site& site = *where.site;
@@ -216,6 +220,10 @@ py::dict convergence(const PosteriorHandle& p, const std::optional<std::string>&
 
 // The posterior file, as fit_classes_to_file writes it (bin/fit_classes.cpp).
 void to_json(const PosteriorHandle& p, const std::string& path) {
+  if (!p.file_text.empty()) {
+    cli::write_output(path, [&](std::ostream& os) { os << p.file_text; });
+    return;
+  }
   py::gil_scoped_release release;
   std::vector<std::vector<fleet::ParameterSummary>> hyper, psi;
   for (const auto& c : p.classes) {

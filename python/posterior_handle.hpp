@@ -20,6 +20,9 @@ struct PosteriorHandle {
   std::vector<records::WimRecord> records;
   std::uint64_t seed = 1;
   std::string source = "the result of ssrfleet.fit()";  // a file's path: how messages name it
+  // The posterior file as the command wrote it, when a fit here went through the command's file
+  // (fit of a manifest's sites): to_json writes these bytes.
+  std::string file_text;
 };
 
 }  // namespace ssrfleet::python

@@ -49,11 +49,11 @@ def long_log():
 def test_fit_stops_within_a_second_and_the_module_goes_on(long_log, small_log, tmp_path):
     _, arrays = small_log
     before = tmp_path / "before.json"
-    ssrfleet.fit(arrays, particles=32, seed=3).to_json(before)
+    ssrfleet.fit(arrays, particles=16, final_sweeps=0, seed=3).to_json(before)
     after_s = interrupted(lambda: ssrfleet.fit(long_log, particles=4096, seed=1), by_signal)
     assert after_s < LIMIT_S
     after = tmp_path / "after.json"
-    ssrfleet.fit(arrays, particles=32, seed=3).to_json(after)  # the same bits as before the interruption
+    ssrfleet.fit(arrays, particles=16, final_sweeps=0, seed=3).to_json(after)  # the same bits as before the stop
     assert filecmp.cmp(before, after, shallow=False)
 
 
@@ -65,7 +65,7 @@ def test_mcmc_chains_stop_within_a_second(long_log):
 
 def test_predict_stops_within_a_second(small_log):
     _, arrays = small_log
-    posterior = ssrfleet.fit(arrays, particles=32, seed=3)
+    posterior = ssrfleet.fit(arrays, particles=16, final_sweeps=0, seed=3)
     # One class's simulated passes run to their end: many draws of few trucks keep each pass short.
     after_s = interrupted(lambda: [posterior.predict(draws=200, trucks_per_draw=100, seed=s) for s in range(1000)],
                           by_signal)

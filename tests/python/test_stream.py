@@ -12,7 +12,7 @@ import pytest
 
 import ssrfleet
 
-TRUCKS, PARTICLES, SEED = 16, 64, 2
+TRUCKS, PARTICLES, SEED = 12, 32, 2
 
 
 def rows(arrays, begin, end):
