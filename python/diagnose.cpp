@@ -37,10 +37,10 @@ bool take(const py::dict& options, const char* key, T& value) {
   return true;
 }
 
-py::tuple diagnose(const SiteHandle& where, const std::optional<std::string>& log_path, const py::object& arrays,
-                   std::uint64_t seed, const py::dict& options, const std::optional<std::string>& json_path,
-                   const std::optional<std::string>& out_dir, const std::optional<std::string>& posterior_path,
-                   bool plots) {
+py::tuple diagnose(const SiteHandle& where, const std::optional<std::string>& log_path,
+                   const py::object& arrays, std::uint64_t seed, const py::dict& options,
+                   const std::optional<std::string>& json_path, const std::optional<std::string>& out_dir,
+                   const std::optional<std::string>& posterior_path, bool plots) {
   discrepancy::DiagnoseOptions o;
   int threads = 0;
   bool progress = false, refit_from_prior = false;
@@ -63,7 +63,8 @@ py::tuple diagnose(const SiteHandle& where, const std::optional<std::string>& lo
   o.refit_from_tables = !refit_from_prior;
   o.validate();
   const site::Site& site = *where.site;
-  for (const auto& name : o.candidates) fleet::make_extension(name, site);  // unknown names fail before any work
+  for (const auto& name : o.candidates)
+    fleet::make_extension(name, site);  // unknown names fail before any work
   if (progress) o.progress = &std::cerr;
 
   auto posterior = std::make_shared<PosteriorHandle>();
@@ -75,7 +76,8 @@ py::tuple diagnose(const SiteHandle& where, const std::optional<std::string>& lo
   run_stoppable([&](const util::StopToken&) {
     if (log_path) posterior->records = cli::read_site_log(*log_path, site, where.flags);
     if (!posterior->records.empty() && !posterior->records.front().vehicle_class.empty()) {
-      std::cerr << "ssrfleet.diagnose: warning: the log's class column is ignored: diagnose fits all its trucks as one "
+      std::cerr << "ssrfleet.diagnose: warning: the log's class column is ignored: diagnose fits all its "
+                   "trucks as one "
                    "fleet (fit the classes apart with fit, or diagnose each class's records alone)\n";
     }
     const auto result = discrepancy::diagnose(site, posterior->records, o);
@@ -83,7 +85,8 @@ py::tuple diagnose(const SiteHandle& where, const std::optional<std::string>& lo
     if (json_path) cli::write_output(*json_path, [&](std::ostream& os) { os << report; });
     if (posterior_path) {
       cli::write_output(*posterior_path, [&](std::ostream& os) {
-        os << io::posterior_file_text(io::posterior_to_json(result.posterior, fleet::summarise_cloud(result.posterior),
+        os << io::posterior_file_text(io::posterior_to_json(result.posterior,
+                                                            fleet::summarise_cloud(result.posterior),
                                                             fleet::summarise_psi(result.posterior)));
       });
     }

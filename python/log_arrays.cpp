@@ -15,23 +15,28 @@ namespace ssrfleet::python {
 
 std::vector<records::WimRecord> records_of_tuple(const py::tuple& arrays, const SiteHandle& where) {
   const auto truck_id = arrays[0].cast<std::vector<std::string>>();
-  const auto time_s = arrays[1].is_none() ? std::nullopt
-                                          : std::optional<py::array_t<double>>(arrays[1].cast<py::array_t<double>>());
+  const auto time_s = arrays[1].is_none()
+                          ? std::nullopt
+                          : std::optional<py::array_t<double>>(arrays[1].cast<py::array_t<double>>());
   const auto speed = arrays[2].cast<py::array_t<double>>();
   const auto mass = arrays[3].cast<py::array_t<double>>();
   const auto impact = arrays[4].cast<py::array_t<double>>();
-  const auto classes = arrays[5].is_none()
-                           ? std::nullopt
-                           : std::optional<std::vector<std::string>>(arrays[5].cast<std::vector<std::string>>());
+  const auto classes =
+      arrays[5].is_none()
+          ? std::nullopt
+          : std::optional<std::vector<std::string>>(arrays[5].cast<std::vector<std::string>>());
   const auto n = static_cast<py::ssize_t>(truck_id.size());
   if (n < 1) throw DataError("log", 2, "truck_id", "the log holds no truck records");
-  if (speed.ndim() != 1 || speed.shape(0) != n) throw UsageError("log: speed_mps must hold one number per truck");
-  if (mass.ndim() != 1 || mass.shape(0) != n) throw UsageError("log: sprung_mass_kg must hold one number per truck");
+  if (speed.ndim() != 1 || speed.shape(0) != n)
+    throw UsageError("log: speed_mps must hold one number per truck");
+  if (mass.ndim() != 1 || mass.shape(0) != n)
+    throw UsageError("log: sprung_mass_kg must hold one number per truck");
   if (time_s && (time_s->ndim() != 1 || time_s->shape(0) != n))
     throw UsageError("log: time_s must hold one number per truck");
   if (classes && static_cast<py::ssize_t>(classes->size()) != n)
     throw UsageError("log: class must hold one label per truck");
-  if (impact.ndim() != 2 || impact.shape(0) != n) throw UsageError("log: impact_factor must be (trucks, sensors)");
+  if (impact.ndim() != 2 || impact.shape(0) != n)
+    throw UsageError("log: impact_factor must be (trucks, sensors)");
   const py::ssize_t m = impact.shape(1);
   if (m != where.site->sensors()) {
     throw DataError("log", 1, "if_" + std::to_string(m),
@@ -62,7 +67,7 @@ std::string log_text(const std::vector<records::WimRecord>& records) {
 }
 
 std::vector<records::WimRecord> read_log_arrays(const py::tuple& arrays, const SiteHandle& where,
-                                                  const io::WimLimits& limits) {
+                                                const io::WimLimits& limits) {
   const std::vector<records::WimRecord> written = records_of_tuple(arrays, where);
   std::stringstream csv(log_text(written));
   io::WimLogReader reader(csv, "log", where.site->options().unsprung_mass_kg, limits);

@@ -4,8 +4,8 @@
 // a seed gives the command's file to the byte.
 #include <cmath>
 #include <fstream>
-#include <iterator>
 #include <iostream>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <optional>
@@ -29,11 +29,11 @@
 #include "io/damage_csv.hpp"
 #include "io/posterior_json.hpp"
 #include "io/wim_log.hpp"
+#include "log_arrays.hpp"
 #include "model/fleet_model.hpp"
 #include "model/model_spec.hpp"
-#include "predict/ssr_prediction.hpp"
-#include "log_arrays.hpp"
 #include "posterior_handle.hpp"
+#include "predict/ssr_prediction.hpp"
 #include "site_handle.hpp"
 #include "stoppable.hpp"
 #include "util/errors.hpp"
@@ -43,7 +43,6 @@ namespace py = pybind11;
 namespace ssrfleet::python {
 
 namespace {
-
 
 // An option given from Python: None leaves the command's default.
 template <typename T>
@@ -91,7 +90,8 @@ std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optiona
     throw UsageError("chains are the batch MCMC's (method='mcmc'); the SMC's independent runs are runs");
   }
   if (method == "mcmc" && !flags.checkpoint_dir.empty()) {
-    throw UsageError("checkpoint: checkpoints are the SMC's (a batch MCMC chain is not resumed); use method='smc'");
+    throw UsageError(
+        "checkpoint: checkpoints are the SMC's (a batch MCMC chain is not resumed); use method='smc'");
   }
   if (!manifest.empty()) {
     // fit --sites MANIFEST: the command's own function writes the posterior file (here a file the
@@ -106,7 +106,8 @@ std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optiona
     request.method = method;
     request.seed = seed;
     request.quiet = !progress;
-    run_stoppable([&](const util::StopToken&) { cli::fit_manifest_sites(request, flags, where.flags, limits); });
+    run_stoppable(
+        [&](const util::StopToken&) { cli::fit_manifest_sites(request, flags, where.flags, limits); });
     auto out = std::make_shared<PosteriorHandle>();
     out->classes = io::read_posterior_classes(out_path);
     out->seed = seed;
@@ -130,8 +131,9 @@ std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optiona
     for (const auto& [label, class_records] : fleet::split_by_class(out->records)) {
       const std::uint64_t class_seed = fleet::class_seed(seed, label);
       fleet::PosteriorCloud cloud =
-          method == "smc" ? cli::fit_smc(site, class_records, flags, class_seed, stream, model.extension.get())
-                          : cli::fit_mcmc(site, class_records, flags, class_seed, stream, model.extension.get());
+          method == "smc"
+              ? cli::fit_smc(site, class_records, flags, class_seed, stream, model.extension.get())
+              : cli::fit_mcmc(site, class_records, flags, class_seed, stream, model.extension.get());
       out->classes.push_back({label, std::move(cloud)});
     }
   });

@@ -46,8 +46,8 @@ bool take(const py::dict& options, const char* key, T& value) {
   return true;
 }
 
-std::shared_ptr<StreamHandle> open_stream(const SiteHandle& where, const std::string& state_dir, std::uint64_t seed,
-                                          const py::dict& o) {
+std::shared_ptr<StreamHandle> open_stream(const SiteHandle& where, const std::string& state_dir,
+                                          std::uint64_t seed, const py::dict& o) {
   auto h = std::make_shared<StreamHandle>();
   h->site = where.site;
   h->state_dir = state_dir;
@@ -74,7 +74,8 @@ std::shared_ptr<StreamHandle> open_stream(const SiteHandle& where, const std::st
   h->model = fleet::parse_model_spec(model_text, *h->site);
   if (h->model.extension) {
     if (options.fit.latent.window > 0) {
-      throw UsageError("model " + h->model.text + " needs the exact latent core: a truck that left the window cannot "
+      throw UsageError("model " + h->model.text +
+                       " needs the exact latent core: a truck that left the window cannot "
                        "be re-simulated at new effect parameters");
     }
     options.fit.core = fleet::OnlineFitOptions::default_core(h->model.extension.get());
@@ -97,7 +98,8 @@ std::shared_ptr<StreamHandle> open_stream(const SiteHandle& where, const std::st
   options.prediction.theta_draws = 2;
   options.prediction.trucks_per_draw = 1;
   run_stoppable([&](const util::StopToken&) {
-    h->stream = std::make_unique<stream::WimStream>(*h->site, options, progress ? &std::cerr : nullptr, h->discard);
+    h->stream =
+        std::make_unique<stream::WimStream>(*h->site, options, progress ? &std::cerr : nullptr, h->discard);
   });
   return h;
 }
@@ -123,7 +125,8 @@ py::dict run(StreamHandle& h, std::istream& in, const std::string& source) {
 
 std::unique_lock<std::mutex> claim(StreamHandle& h) {
   std::unique_lock<std::mutex> lock(h.busy, std::try_to_lock);
-  if (!lock.owns_lock()) throw BusyError("the Stream on '" + h.state_dir + "' is in use by another thread's call");
+  if (!lock.owns_lock())
+    throw BusyError("the Stream on '" + h.state_dir + "' is in use by another thread's call");
   if (!h.stream) throw UsageError("the Stream on '" + h.state_dir + "' is closed");
   return lock;
 }
@@ -158,10 +161,12 @@ void bind_stream(py::module_& m) {
            })
       .def("close", [](StreamHandle& h) {
         std::unique_lock<std::mutex> lock(h.busy, std::try_to_lock);
-        if (!lock.owns_lock()) throw BusyError("the Stream on '" + h.state_dir + "' is in use by another thread's call");
+        if (!lock.owns_lock())
+          throw BusyError("the Stream on '" + h.state_dir + "' is in use by another thread's call");
         h.stream.reset();  // releases the state's lock
       });
-  m.def("_open_stream", &open_stream, py::arg("site"), py::arg("state_dir"), py::arg("seed"), py::arg("options"));
+  m.def("_open_stream", &open_stream, py::arg("site"), py::arg("state_dir"), py::arg("seed"),
+        py::arg("options"));
 }
 
 }  // namespace ssrfleet::python

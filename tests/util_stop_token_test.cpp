@@ -51,7 +51,8 @@ fleet::OnlineFitOptions smc_options(long particles) {
 }
 }  // namespace
 
-TEST_CASE("a token is only the calling thread's, scopes nest, and an untripped token never throws", "[util][stop]") {
+TEST_CASE("a token is only the calling thread's, scopes nest, and an untripped token never throws",
+          "[util][stop]") {
   CHECK(util::current_stop_token() == nullptr);
   CHECK_NOTHROW(util::throw_if_stopped());
   util::StopToken outer, inner;
@@ -65,7 +66,9 @@ TEST_CASE("a token is only the calling thread's, scopes nest, and an untripped t
       CHECK_THROWS_AS(util::throw_if_stopped(), util::Stopped);
       // Another thread has no token, whatever this one has.
       bool elsewhere = true;
-      std::thread([&] { elsewhere = util::current_stop_token() != nullptr || util::stop_requested(); }).join();
+      std::thread([&] {
+        elsewhere = util::current_stop_token() != nullptr || util::stop_requested();
+      }).join();
       CHECK_FALSE(elsewhere);
     }
     CHECK(util::current_stop_token() == &outer);
@@ -80,17 +83,21 @@ TEST_CASE("an SMC fit stops with Stopped within a second of its token being trip
   const auto options = smc_options(4096);  // far more than 0.3 s of work on two cores
   bool threw = false;
   const Clock::time_point started = Clock::now();
-  const double after_trip_s = stop_after(0.3, [&] {
-    auto fit = fleet::make_online_fit(c.site, options);
-    fleet::replay(*fit, c.log.records, {});
-  }, threw);
+  const double after_trip_s = stop_after(
+      0.3,
+      [&] {
+        auto fit = fleet::make_online_fit(c.site, options);
+        fleet::replay(*fit, c.log.records, {});
+      },
+      threw);
   const double total_s = std::chrono::duration<double>(Clock::now() - started).count();
   INFO("ended " << after_trip_s << " s after the trip, " << total_s << " s in all");
   CHECK(threw);
   CHECK(after_trip_s < 1.0);
 }
 
-TEST_CASE("batch MCMC chains on threads of their own stop within a second of the caller's token", "[util][stop]") {
+TEST_CASE("batch MCMC chains on threads of their own stop within a second of the caller's token",
+          "[util][stop]") {
   const test::SimulatedCase c(60, 4);
   fleet::BatchMcmcChainsOptions o;
   o.chains = 3;
@@ -100,7 +107,8 @@ TEST_CASE("batch MCMC chains on threads of their own stop within a second of the
   o.chain.seed = 2;
   o.chain.threads = 2;
   bool threw = false;
-  const double after_trip_s = stop_after(0.3, [&] { fleet::run_batch_mcmc_chains(c.site, c.log.records, o); }, threw);
+  const double after_trip_s = stop_after(
+      0.3, [&] { fleet::run_batch_mcmc_chains(c.site, c.log.records, o); }, threw);
   INFO("ended " << after_trip_s << " s after the trip");
   CHECK(threw);
   CHECK(after_trip_s < 1.0);

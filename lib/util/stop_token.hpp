@@ -1,9 +1,15 @@
 // Stopping a long call from another thread (an interactive user's Ctrl-C in the Python module).
 //
 // A StopToken is a flag another thread trips; the library's long loops (the tempered SMC's steps
-// and move sweeps, the batch MCMC's sweeps, diagnose's candidates, predict's classes, the stream's
-// records) call throw_if_stopped(), which throws Stopped once the token of the current call is
-// tripped. Each loop checks at least every fraction of a second, so a call ends within a second.
+// and move sweeps, the batch MCMC's sweeps and its per-truck starting fits, diagnose's candidates,
+// predict's and damage's classes) call throw_if_stopped(), which throws Stopped once the token of
+// the current call is tripped. The stream's record loop checks stop_requested() between records
+// and ends as on its stop flag, its state saved; a tripped current token may still stop the
+// record in hand inside its SMC stage (the state on disk is then the last record's), so a caller
+// that wants the stream object to stay usable passes StopToken::flag() as the stream's stop flag
+// and installs no current token (the Python module's Stream does). Between two checks lies one
+// step, sweep, truck or class: well under a second at the sizes the commands run, so a call ends
+// within a second of the trip.
 //
 // How a call receives its token: a thread-local "current token", installed for a scope by
 // StopScope in the thread that drives the call. Not a field in the option structs, because a fit
@@ -13,8 +19,8 @@
 // (theirs is null), so throw_if_stopped inside a parallel body is a no-op; a chain that runs on a
 // thread of its own (the batch MCMC's chains) is given its driver's token by StopScope there, and
 // the one parallel loop long enough to need a check takes the driver's token along (StopCheck).
-// With no token installed (the command line), a check is one thread-local load and a compare:
-// nothing beside a stage or a sweep.
+// With no token installed (the command line), a check is a call, a thread-local load and a
+// compare: nothing beside a step or a sweep.
 //
 // Stopped is its own type (not a DataError or a UsageError, and not a std::runtime_error, so no
 // handler written for those swallows it): the caller that tripped the token expects it and nobody
