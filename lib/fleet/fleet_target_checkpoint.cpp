@@ -1,5 +1,9 @@
-// The latent core's checkpoint: every particle's θ, ψ and sums, and the kept trucks' latents, in
-// the order FleetTarget::load reads them back.
+// The latent core's checkpoint: every particle's θ, ψ and latents and the trucks' data, in the order
+// FleetTarget::load reads them back. The layout still holds the fields of a bounded-memory mode the
+// core once had (a window, the sums of the trucks that left it, a pool of their speeds and masses),
+// written as that mode's "off" (0, zeros, every truck), so that states written then in the exact
+// mode resume bit for bit; a state written with a window is refused by name.
+#include <algorithm>
 #include <cstdint>
 #include <string>
 
@@ -12,13 +16,13 @@ namespace ssrfleet::fleet {
 void FleetTarget::save(BinaryWriter& out) const {
   out.value<std::int64_t>(options_.particles);
   out.value<std::int32_t>(sensors_);
-  out.value<std::int64_t>(options_.window);
-  out.value<std::int64_t>(total_trucks_);
-  out.matrix(retired_);
-  out.value<std::uint64_t>(pool_speed_mps_.size());
-  for (std::size_t j = 0; j < pool_speed_mps_.size(); ++j) {
-    out.value(pool_speed_mps_[j]);
-    out.value(pool_sprung_mass_kg_[j]);
+  out.value<std::int64_t>(0);  // window
+  out.value<std::int64_t>(kept_trucks());
+  out.matrix(Eigen::MatrixXd::Zero(kSumCount, options_.particles));  // sums of trucks out of the window
+  out.value<std::uint64_t>(speed_mps_.size());                         // the prediction pool: every truck
+  for (std::size_t j = 0; j < speed_mps_.size(); ++j) {
+    out.value(speed_mps_[j]);
+    out.value(sprung_mass_kg_[j]);
   }
   out.value<std::int64_t>(kept_trucks());
   for (Eigen::Index j = 0; j < kept_trucks(); ++j) {
@@ -43,19 +47,21 @@ void FleetTarget::load(BinaryReader& in) {
   const Eigen::Index P = options_.particles;
   if (in.value<std::int64_t>("particles") != P) in.fail("particles", "saved with another particle count");
   if (in.value<std::int32_t>("sensors") != sensors_) in.fail("sensors", "saved for another sensor count");
-  if (in.value<std::int64_t>("window") != options_.window) in.fail("window", "saved with another --window");
-  total_trucks_ = in.value<std::int64_t>("total_trucks");
-  retired_ = in.matrix("retired", kSumCount, P);
-  const auto pool = in.value<std::uint64_t>("pool");
-  if (pool > static_cast<std::uint64_t>(total_trucks_)) in.fail("pool", "larger than the trucks absorbed");
-  pool_speed_mps_.clear();
-  pool_sprung_mass_kg_.clear();
-  for (std::uint64_t j = 0; j < pool; ++j) {
-    pool_speed_mps_.push_back(in.value<double>("pool_speed_mps"));
-    pool_sprung_mass_kg_.push_back(in.value<double>("pool_sprung_mass_kg"));
+  const auto window = in.value<std::int64_t>("window");
+  if (window != 0) {
+    in.fail("window", "written with --window " + std::to_string(window) +
+                          ", a bounded-memory approximation this ssrfleet no longer has: replay the log into a new "
+                          "state (the default core's memory per truck is flat)");
   }
+  const auto total_trucks = in.value<std::int64_t>("total_trucks");
+  if (!in.matrix("retired", kSumCount, P).isZero(0.0)) in.fail("retired", "sums of retired trucks without a window");
+  const auto pool = in.value<std::uint64_t>("pool");
+  if (pool != static_cast<std::uint64_t>(std::max<std::int64_t>(total_trucks, 0))) {
+    in.fail("pool", "does not hold every truck absorbed");
+  }
+  for (std::uint64_t j = 0; j < 2 * pool; ++j) (void)in.value<double>("pool");  // the trucks' own data follow
   const auto n = in.value<std::int64_t>("trucks");
-  if (n > total_trucks_) in.fail("trucks", "more kept trucks than absorbed");
+  if (n != total_trucks) in.fail("trucks", "not every truck absorbed kept");
   if (n < 0 || n > 100'000'000) in.fail("trucks", "implausible truck count");
   speed_mps_.clear();
   sprung_mass_kg_.clear();
