@@ -1,4 +1,4 @@
-// Issue 14 item 5: is the SMC posterior the exact one? Judged against a long batch-MCMC chain on
+// Is the SMC posterior the exact one? Judged against a long batch-MCMC chain on
 // the same data (the reference): for each hyperparameter, each SMC fit's posterior mean must lie
 // within 0.25 reference posterior sd of the reference mean, and its posterior sd within 20 % of
 // the reference's. Every SMC seed is a fit a user could have run, so the criterion is applied to
@@ -146,7 +146,7 @@ inline std::string verdict_note(const Accuracy& acc) {
 }
 
 inline void write_accuracy_markdown(std::ostream& f, const Accuracy& acc) {
-  f << "Accuracy (issue 14 item 5) against the full MCMC chain, every SMC seed: |mean offset| <= "
+  f << "Accuracy against the full MCMC chain, every SMC seed: |mean offset| <= "
     << kMeanToleranceSd << " MCMC sd and sd ratio within " << 100.0 * kSdRatioTolerance
     << " %. Reference: smallest full-chain ESS " << fmt(acc.reference_min_ess, 0) << " ("
     << fleet::kHyperNames[acc.reference_worst] << "), " << (acc.reference_long_enough ? ">=" : "BELOW") << " the "

@@ -1,4 +1,4 @@
-// Coverage benchmark (issue 14 item 5's coverage harness): are the SMC's 95 % intervals 95 %
+// Coverage benchmark : are the SMC's 95 % intervals 95 %
 // intervals? For data seeds 1, ..., S a fleet of N trucks is drawn and simulated (fleet_presets.hpp:
 // the fleet draw and the noise both from the data seed), fitted as `ssrfleet fit` fits
 // (fleet::MarginalSmc, default options: every record absorbed, then rejuvenate(final_sweeps)), and
@@ -52,8 +52,8 @@ using bench::fmt_g;
 namespace {
 
 constexpr double kNominalCoverage = 0.95;
-constexpr double kRequiredFraction = 17.0 / 20.0;  // issue 14: at least 17 of 20
-// Judged by the issue: K, K_t, Z, sigma_z, sigma_IF (fleet_model.hpp order).
+constexpr double kRequiredFraction = 17.0 / 20.0;  // the target: at least 17 of 20
+// Judged: K, K_t, Z, sigma_z, sigma_IF (fleet_model.hpp order).
 constexpr std::array<bool, fleet::kHyperCount> kJudged = {true, false, true, false, true, true, true};
 
 struct SeedOutcome {
@@ -227,7 +227,7 @@ void write_markdown(std::ostream& f, const Settings& s, const std::vector<SeedOu
     << fleet::MarginalSmc::Options{}.sampler.schedule.final_sweeps << "); interval = weighted 2.5 % / 97.5 % quantiles. Commit "
     << s.commit << ", nproc " << s.nproc << ", started " << s.started << ", written " << bench::utc_now()
     << ", 1-min load " << fmt(s.load_before, 2) << " before, " << fmt(bench::load_average_1min(), 2) << " now.\n\n";
-  f << "Judged (issue 14): K, Kt, Z, sigma_z, sigma_if, each covered in at least " << required << " of " << s.seeds
+  f << "Judged: K, Kt, Z, sigma_z, sigma_if, each covered in at least " << required << " of " << s.seeds
     << ". **Verdict: " << (!complete ? "partial" : (all_judged_pass(covered, required) ? "PASS" : "FAIL"))
     << "**. Failed fits (counted as misses): " << failed_fits(outcomes) << ".\n\n";
   f << "Statistics: at true coverage 95 % the count is Binomial(" << s.seeds << ", 0.95): P(count < " << required

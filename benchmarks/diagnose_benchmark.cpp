@@ -1,4 +1,4 @@
-// Issue 6's benchmark: the wall time of `diagnose` on a 100-truck log, and how often it names the
+// The diagnose benchmark: the wall time of `diagnose` on a 100-truck log, and how often it names the
 // right effect as the fleet grows. Logs are Table 1 fleets on AS1 at sigma_IF = 0.02, simulated
 // with the effect on and diagnosed with the whole catalogue; "none" logs have no effect, where
 // the right answer is "none". Writes a JSON and a Markdown report.
@@ -10,7 +10,7 @@
 //                      [--trucks 20,50,100,200] [--seeds 2] [--particles 256] [--threads 2]
 //                      [--clean-logs 0] [--clean-trucks 100] [--runs FILE.jsonl] [--plot STEM] [--skip-timing]
 //                      [--shard K/N] [--json FILE] [--markdown FILE]
-// The detection part is issue 17 item 4's power table (diagnose_power.hpp): --seeds logs per
+// The detection part is the power table (diagnose_power.hpp): --seeds logs per
 // (effect, fleet size), --clean-logs more clean logs of --clean-trucks for the pooled false-alarm
 // rate, every run appended to --runs as it ends (a restart skips those), --plot STEM the figure.
 // An effect's size is its setting's last parameter: write the one that grows last.
@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
   // made at any thread count (the answers do not depend on it).
   md << "# diagnose benchmark (AS1, Table 1 fleet, sigma_IF = 0.02)\n\n";
 
-  // 1. Wall time on 100 trucks with the default particle count (issue 17 item 6: at most 60 s, and
+  // 1. Wall time on 100 trucks with the default particle count (at most 60 s, and
   // a second effect at most as much again): one effect, then two at once, then (unless
   // --skip-prior) the one-effect log again with the candidates refitted the older way, each new
   // truck drawn from the fleet prior, side by side in this run.
@@ -180,7 +180,7 @@ int main(int argc, char** argv) {
          << std::defaultfloat;
       std::cerr << "timing: " << run.label << ": " << run.wall_s << " s, named " << r.model << "\n";
     }
-    md << "\nTargets (issue 17 item 6): one effect at most 60 s; a second effect at most as much again. A round is "
+    md << "\nTargets: one effect at most 60 s; a second effect at most as much again. A round is "
           "its refits, the chosen refit's final sweeps and its checks; the last round of a log finds nothing more "
           "to add (or, at --max-effects, is not run).";
     if (!skip_prior)
@@ -189,8 +189,8 @@ int main(int argc, char** argv) {
     md << "\n\n";
   }
 
-  // 2. Detection rate against effect size and fleet size, and false alarms on clean logs (issue 17
-  // item 4; none with --skip-detection). Runs already in --runs are not done again.
+  // 2. Detection rate against effect size and fleet size, and false alarms on clean logs
+  // (none with --skip-detection). Runs already in --runs are not done again.
   const auto effects = trucks_arg.empty() ? std::vector<std::string>{} : split(effects_arg, ';');
   std::vector<int> sizes;
   for (const auto& s : split(trucks_arg, ',')) sizes.push_back(std::stoi(s));

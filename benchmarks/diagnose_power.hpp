@@ -1,4 +1,4 @@
-// The power and false-alarm table of `diagnose` (issue 17 item 4): detection rate against effect
+// The power and false-alarm table of `diagnose`: detection rate against effect
 // size and fleet size, the false-alarm rate pooled over clean logs, each with its Clopper-Pearson
 // 95 % interval, and a plot of detection probability against effect size, one panel per effect.
 //
@@ -207,7 +207,7 @@ inline std::string tables(const std::vector<Run>& runs, const std::vector<std::s
           "size: **"
        << alarms << " of " << clean << "** (" << percent(static_cast<double>(alarms) / clean)
        << " %), Clopper-Pearson 95 % interval " << interval(alarms, clean)
-       << ". Target (issue 17 item 4): at most 5 % over at least 100 clean logs: "
+       << ". Target: at most 5 % over at least 100 clean logs: "
        << (clean < 100 ? "too few clean logs to judge"
                        : (ci.upper <= 0.05 ? "met (the interval's upper end is within 5 %)"
                                            : (static_cast<double>(alarms) / clean <= 0.05

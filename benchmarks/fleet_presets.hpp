@@ -1,4 +1,4 @@
-// The simulated fleets the accuracy, coverage and ratio benchmarks fit (issue 14 item 5): the
+// The simulated fleets the accuracy, coverage and ratio benchmarks fit: the
 // paper's Table 1 fleet, and a second one whose hyperparameters, road and noise all differ from
 // Table 1's, so that a sampler tuned (knowingly or not) to the paper's case would show it. A
 // preset knows the generating parameters, which are the "truth" a posterior is judged against.

@@ -1,4 +1,4 @@
-// A long reference run of the batch MCMC (issue 14 item 5): the posterior mean, sd and chain ESS
+// A long reference run of the batch MCMC: the posterior mean, sd and chain ESS
 // of the 7 hyperparameters on one of the preset fleets (fleet_presets.hpp, data seed 1, as
 // ratio_benchmark simulates it), with default options (interweaving, best-fit starts, lateral
 // jumps every 5th sweep), to judge an SMC fit against when ratio_benchmark's own chain is too short

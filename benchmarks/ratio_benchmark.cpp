@@ -19,7 +19,7 @@
 //       extrapolation from the whole chain is reported separately (and flagged).
 //   (c) the cost of one more truck: one absorb() of a fresh simulated truck into each SMC fit after
 //       its final sweeps, against re-running the MCMC to ESS 400.
-//   (d) accuracy (issue 14 item 5, accuracy.hpp): each SMC seed's posterior mean and sd against the
+//   (d) accuracy (accuracy.hpp): each SMC seed's posterior mean and sd against the
 //       whole kept MCMC chain, which is the reference only if its ESS is >= 1,000 on all 7.
 //       --reference FILE (a JSON of mcmc_reference_benchmark, same fleet, same data seed 1) judges
 //       against that stored chain instead and runs no MCMC here: accuracy only, no ratio (at

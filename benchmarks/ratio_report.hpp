@@ -180,7 +180,7 @@ inline void write_results(const std::vector<NResult>& results, const std::vector
     per_n.push_back(e);
   }
   j["results"] = per_n;
-  j["targets"] = "issue 14 item 6: MCMC/SMC time to ESS 400 >= 1x at N = 100, >= 10x at N = 10,000; item 5: "
+  j["targets"] = "MCMC/SMC time to ESS 400 >= 1x at N = 100, >= 10x at N = 10,000; "
                  "accuracy against a reference chain with ESS >= 1,000 on all 7";
   if (!json_path.empty()) {
     std::ofstream f = open_results_file(json_path);
@@ -233,8 +233,8 @@ inline void write_results(const std::vector<NResult>& results, const std::vector
       << " / " << fmt(r.load_after, 2) << " | " << fmt(s.scatter_last.min_ess, 0) << " ("
       << fleet::kHyperNames[s.scatter_last.worst] << "), " << fmt(r.ratio_last, 2) << " |\n";
   }
-  f << "\nTargets (issue 14 item 6): ratio >= 1 at N = 100, >= 10 at N = 10,000.\n\n";
-  f << "| N | accuracy verdict (item 5) | MCMC full-chain min ESS (param) |\n|---|---|---|\n";
+  f << "\nTargets: ratio >= 1 at N = 100, >= 10 at N = 10,000.\n\n";
+  f << "| N | accuracy verdict | MCMC full-chain min ESS (param) |\n|---|---|---|\n";
   for (const auto& r : results)
     f << "| " << r.trucks << " | " << verdict_name(r.accuracy.verdict) << " | "
       << fmt(r.accuracy.reference_min_ess, 0) << " (" << fleet::kHyperNames[r.accuracy.reference_worst] << ") |\n";

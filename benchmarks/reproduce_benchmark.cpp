@@ -1,4 +1,4 @@
-// The reproduction across seeds and noise levels (issue 5's harness): runs reproduce::run (the
+// The reproduction across seeds and noise levels: runs reproduce::run (the
 // code behind `ssrfleet reproduce`, plots off) for seeds 1..S at each sigma_IF, and reports per
 // hyperparameter the bias and RMSE of the posterior mean and the coverage of the 95 % intervals
 // over seeds; the prediction coverage (Figs. 7, 8, 9); the largest AS2/AS3 mean difference; and

@@ -1,4 +1,4 @@
-// Simulation-based calibration of the base model (issue 17 item 5; Talts, Betancourt, Simpson,
+// Simulation-based calibration of the base model (Talts, Betancourt, Simpson,
 // Vehtari & Gelman 2018, arXiv:1804.06788, Algorithm 1). For r = 1, ..., R:
 //   1. θ_r uniform on the SBC prior box (sbc_prior.hpp), from stream r of a fixed generator;
 //   2. a fleet of N trucks from θ_r and its WIM log on AS1 with noise σ_IF from θ_r (data seed r);

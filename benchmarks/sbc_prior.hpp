@@ -1,4 +1,4 @@
-// The prior of the simulation-based calibration (sbc_benchmark.cpp, issue 17 item 5): the law θ is
+// The prior of the simulation-based calibration (sbc_benchmark.cpp): the law θ is
 // drawn from, and the prior the fit is given, so that the two are the same law.
 //
 // Why not the model's default priors (docs/model.md, fleet::PriorBounds{}): SBC needs the simulator and the

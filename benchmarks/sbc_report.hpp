@@ -30,7 +30,7 @@ using HyperInts = std::array<int, fleet::kHyperCount>;
 
 // The 99 % band of each bin's count under uniform ranks (the figure's grey band).
 inline constexpr double kBandLevel = 0.99;
-// A hyperparameter's histogram fails at p <= this (issue 17 item 5).
+// A hyperparameter's histogram fails at p <= this.
 inline constexpr double kPassP = 0.01;
 
 struct Settings {

@@ -1,6 +1,6 @@
 // A stored batch-MCMC reference (the JSON mcmc_reference_benchmark writes), read back so that
 // ratio_benchmark --reference can judge SMC fits against a chain far longer than it could run
-// beside them (issue 14 item 5 at 10,000 trucks: 160,000 sweeps, 88 minutes). The file must be
+// beside them (at 10,000 trucks: 160,000 sweeps, 88 minutes). The file must be
 // for the same fleet preset and data seed; anything missing or malformed is refused with the
 // file and the field named.
 #pragma once

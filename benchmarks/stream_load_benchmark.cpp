@@ -1,4 +1,4 @@
-// Stream load benchmark (issue 20, item 6): `ssrfleet stream` over a long simulated log with a
+// Stream load benchmark: `ssrfleet stream` over a long simulated log with a
 // fraction of bad records of every kind salted in at random. It checks that every bad record is in
 // rejects.csv with its reason (by line number and verbatim), that every good record was absorbed
 // (the posterior's truck count, one history report per truck), and samples the stream's resident

@@ -1,4 +1,4 @@
-// Weigh benchmark (issue 18 item 2): how well does the SSR-corrected multiple-sensor estimator
+// Weigh benchmark: how well does the SSR-corrected multiple-sensor estimator
 // (weigh/static_weight.hpp) recover a truck's static wheel load, beside the plain mean of the
 // sensors, on simulated logs whose static weights are known?
 //

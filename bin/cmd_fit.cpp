@@ -60,6 +60,8 @@ int run_fit(int argc, const char* const argv[]) {
   po::positional_options_description positional;
   positional.add("log", 1);
   po::variables_map vm;
+  refuse_options(argc, argv, {{"--window", "the default (marginal) core keeps its memory per truck flat and needs no "
+                                           "window: drop --window"}});
   if (!parse_or_help(argc, argv, desc, &positional, vm,
                      "ssrfleet fit LOG [--road ROAD] [--model SPEC] [--out FILE] [--particles N] [--seed SEED]\n"
                      "ssrfleet fit --sites MANIFEST [--site NAME] [--calibrate] [--out FILE] [...]",

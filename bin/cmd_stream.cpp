@@ -71,9 +71,6 @@ int run_stream(int argc, const char* const argv[]) {
        "the model to fit: base, or effects joined by '+', each NAME or NAME:param=value,... (a parameter given is "
        "fixed, one left out is fitted); effects run on the exact latent core; a resume must use the same model "
        "(ssrfleet effects lists them)")
-      ("window", po::value(&options.fit.latent.window)->value_name("N")->default_value(0),
-       "bounded memory on the latent core: keep and move only the last N trucks' latents, older ones as sufficient "
-       "statistics (0 = the default exact marginal core, whose memory per truck is a table of a few KB)")
       ("tables-in-memory", po::bool_switch(&options.tables_in_memory),
        "keep the marginal core's truck tables, the trucks' data and their ids in memory (about 5 KB a truck) instead of "
        "unnamed files in the state directory that the kernel pages, which keep the stream's own memory flat; same results")
@@ -85,6 +82,8 @@ int run_stream(int argc, const char* const argv[]) {
       ("quiet,q", po::bool_switch(&quiet), "no progress on standard error");
   site_flags.add_to(desc);
   po::variables_map vm;
+  refuse_options(argc, argv, {{"--window", "the default (marginal) core keeps its memory per truck flat and needs no window: drop --window "
+                                           "(a state written with it cannot be resumed; replay its log into a new one)"}});
   if (!parse_or_help(argc, argv, desc, nullptr, vm,
                      "ssrfleet stream --state DIR [--road ROAD | --sites MANIFEST] [--input FILE] [--follow] "
                      "[--report-every N]",
@@ -94,8 +93,6 @@ int run_stream(int argc, const char* const argv[]) {
     return 0;
   }
   check_particles(particles);
-  if (options.fit.latent.window < 0) throw UsageError("--window must be >= 0");
-  if (options.fit.latent.window > 0) options.fit.core = fleet::OnlineFitOptions::Core::kLatent;
   // The core is chosen before the sampler options go to it (sampler() is the chosen core's).
   // The sites: --road and the site flags, or a manifest's (heap: the stream keeps pointers to them).
   ManifestSites sites;
@@ -105,9 +102,9 @@ int run_stream(int argc, const char* const argv[]) {
     stream_sites.push_back({"", sites.sites.back().get(), {}});
   } else {
     refuse_beside_sites(vm, {"road", "sensors"});
-    if (options.fit.latent.window > 0 || model_text != "base") {
+    if (model_text != "base") {
       throw UsageError("--sites streams the base model on the marginal core (each truck's table built through its own "
-                       "site); --window and --model need the latent core, which streams one site");
+                       "site); --model with an effect streams one site");
     }
     const io::SiteManifest manifest = io::read_site_manifest(manifest_path);
     sites = build_manifest_sites(manifest, site_flags, &std::cerr);
@@ -121,10 +118,6 @@ int run_stream(int argc, const char* const argv[]) {
   const site::Site& site = *sites.sites.front();
   const fleet::ModelSpec model = fleet::parse_model_spec(model_text, site);
   if (model.extension) {
-    if (options.fit.latent.window > 0) {
-      throw UsageError("--model " + model.text + " needs the exact latent core: a truck that left the --window cannot "
-                       "be re-simulated at new effect parameters");
-    }
     options.fit.core = fleet::OnlineFitOptions::default_core(model.extension.get());
     options.fit.extension = model.extension.get();
   }

@@ -33,7 +33,6 @@ struct FitFlags {
   // the latent core's when that core is chosen and the flag was not given.
   int final_sweeps = fleet::MarginalSmc::Options{}.sampler.schedule.final_sweeps;
   bool final_sweeps_given = false;
-  long window = 0;  // bounded memory on the latent core (see stream --window)
   double cess_target = fleet::MarginalSmc::Options{}.sampler.tempering.cess_target;
   int max_sweeps = fleet::MarginalSmc::Options{}.sampler.schedule.max_sweeps;
   bool max_sweeps_given = false;

@@ -32,8 +32,8 @@ void FitFlags::add_to(po::options_description& desc) {
        "--method mcmc (ssrfleet effects lists them)")
       ("core", po::value(&core)->value_name("CORE")->default_value(core),
        "inference core: marginal (each truck's latents integrated out in a table built on arrival; IBIS over the "
-       "7 hyperparameters, cost per truck flat in n) or latent (every truck's latents in every particle; needed for "
-       "--window; cost per truck grows with n)")
+       "7 hyperparameters, cost per truck flat in n) or latent (every truck's latents in every particle; cost per "
+       "truck grows with n)")
       ("particles", po::value(&particles)->value_name("N")->default_value(particles), "number of particles P (>= 2)")
       ("threads", po::value(&threads)->value_name("N")->default_value(threads),
        "worker threads; 0 = all cores (results do not depend on it)")
@@ -46,9 +46,6 @@ void FitFlags::add_to(po::options_description& desc) {
        "MCMC sweeps per move phase at most (latent core: per tempering step, 5 unless given)")
       ("older-sweeps", po::value(&older_sweeps)->value_name("N")->default_value(older_sweeps),
        "latent core: MH sweeps over every older truck's latents after each new truck (0 = off)")
-      ("window", po::value(&window)->value_name("N")->default_value(window),
-       "latent core: keep and move only the last N trucks' latents per particle; older ones as sufficient statistics "
-       "(0 = exact)")
       ("checkpoint", po::value(&checkpoint_dir)->value_name("DIR"),
        "a directory for the fit's checkpoints (marginal core; made if missing): a fit that stopped (a killed job, a "
        "lost MPI rank) resumes from its last one with the same result, also on another number of ranks; a log grown "
@@ -119,11 +116,6 @@ fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t 
       throw MissingInputError("--checkpoint '" + flags.checkpoint_dir + "': cannot make the directory (does its parent exist?)");
     }
   }
-  if (flags.window < 0) throw UsageError("--window must be >= 0");
-  if (flags.window > 0 && o.core == fleet::OnlineFitOptions::Core::kMarginal) {
-    throw UsageError("--window is an approximation of the latent core (--core latent); the marginal core is exact "
-                     "with a flat memory per truck and needs no window");
-  }
   if (flags.final_sweeps < 0) throw UsageError("--final-sweeps must be >= 0");
   if (flags.max_sweeps < 1) throw UsageError("--max-sweeps must be >= 1");
   o.sampler().particles = flags.particles;
@@ -132,7 +124,6 @@ fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t 
   o.sampler().tempering.cess_target = flags.cess_target;
   if (o.core == fleet::OnlineFitOptions::Core::kMarginal || flags.max_sweeps_given) o.sampler().schedule.max_sweeps = flags.max_sweeps;
   o.latent.older_sweeps = flags.older_sweeps;
-  o.latent.window = flags.window;
   std::string why;
   if (!o.sampler().IsValid(&why)) throw UsageError(why);
   return o;

@@ -7,7 +7,7 @@
 # FUZZER WORK_DIR/artifacts/crash-...). Exit 0 only if the run ended with none of those (slow-unit-*
 # files are listed, not failures).
 # Limits per input: 10 s (a hang; FUZZ_TIMEOUT=N sets another), 1 GiB in one malloc or 2 GiB
-# resident (an allocation from a small input that large is a bug: issue 20 item 8). libFuzzer's
+# resident (an allocation from a small input that large is a bug). libFuzzer's
 # timeout is wall time: a valid manifest that names two preset roads builds both sites, 3.2 s of CPU
 # in this sanitized -O1 build, and passed 10 s on a loaded machine; site_manifest and stream_state
 # (each input a resume) are run with FUZZ_TIMEOUT=60.

@@ -62,7 +62,6 @@ std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optiona
   take(options, "threads", flags.threads);
   take(options, "older_sweeps", flags.older_sweeps);
   flags.final_sweeps_given = take(options, "final_sweeps", flags.final_sweeps);
-  take(options, "window", flags.window);
   take(options, "cess", flags.cess_target);
   flags.max_sweeps_given = take(options, "max_sweeps", flags.max_sweeps);
   take(options, "iterations", flags.iterations);

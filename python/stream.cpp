@@ -61,7 +61,6 @@ std::shared_ptr<StreamHandle> open_stream(const SiteHandle& where, const std::st
   take(o, "particles", particles);
   take(o, "threads", threads);
   take(o, "model", model_text);
-  take(o, "window", options.fit.latent.window);
   take(o, "classes", classes);
   take(o, "fhwa_classes", options.limits.fhwa_classes);
   take(o, "tables_in_memory", options.tables_in_memory);
@@ -69,15 +68,8 @@ std::shared_ptr<StreamHandle> open_stream(const SiteHandle& where, const std::st
   // The command's checks and settings, in its order (bin/cmd_stream.cpp).
   cli::check_particles(particles);
   if (threads < 0) throw UsageError("threads must be >= 0 (0 = all cores)");
-  if (options.fit.latent.window < 0) throw UsageError("window must be >= 0");
-  if (options.fit.latent.window > 0) options.fit.core = fleet::OnlineFitOptions::Core::kLatent;
   h->model = fleet::parse_model_spec(model_text, *h->site);
   if (h->model.extension) {
-    if (options.fit.latent.window > 0) {
-      throw UsageError("model " + h->model.text +
-                       " needs the exact latent core: a truck that left the window cannot "
-                       "be re-simulated at new effect parameters");
-    }
     options.fit.core = fleet::OnlineFitOptions::default_core(h->model.extension.get());
     options.fit.extension = h->model.extension.get();
   }

@@ -1,4 +1,4 @@
-// The power campaign's bookkeeping (benchmarks/diagnose_power.hpp, issue 17 item 4): which runs
+// The power campaign's bookkeeping (benchmarks/diagnose_power.hpp): which runs
 // count as right, the runs file that lets a campaign stop and go on, the false-alarm verdict
 // against the 5 % target, and the plot's script. A campaign runs for hours on these verdicts, so
 // they are checked here on runs made up for the purpose, not on a campaign's output.

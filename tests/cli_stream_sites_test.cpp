@@ -132,7 +132,7 @@ TEST_CASE("stream --sites absorbs every site's records into one fleet and quaran
   const auto no_column = s.stream(s.dir.file("state2"), s.dir.file("plain.csv"));
   CHECK(no_column.status == 65);
   CHECK(no_column.err.find("field 'site'") != std::string::npos);
-  for (const char* bad : {"--road AS2", "--window 5", "--model tyre_damping"}) {
+  for (const char* bad : {"--road AS2", "--model tyre_damping"}) {
     const auto u = s.stream(s.dir.file("state3"), input, bad);
     INFO(bad << ": " << u.err);
     CHECK(u.status == 64);

@@ -358,10 +358,17 @@ TEST_CASE("a stream fits a model, records it in its state, and refuses to resume
   CHECK(other.status != 0);
   CHECK(other.err.find("the state was written with --model speed_bias") != std::string::npos);
   CHECK(test::read_text(state + "/posterior.json") == before);
-  const auto windowed = run_ssrfleet("stream --state " + q(dir.file("w")) + " --input " + q(log) +
-                                         " --model speed_bias --window 3 --quiet", dir);
-  CHECK(windowed.status != 0);
-  CHECK(windowed.err.find("needs the exact latent core") != std::string::npos);
+  // The bounded-memory window is gone: a usage error that says what to do instead, and no state.
+  for (const char* window : {" --window 3", " --window=3"}) {
+    const auto windowed = run_ssrfleet("stream --state " + q(dir.file("w")) + " --input " + q(log) + window + " --quiet", dir);
+    CHECK(windowed.status == 64);
+    CHECK(windowed.err.find("--window is not an option of stream") != std::string::npos);
+    CHECK(windowed.err.find("drop --window") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir.file("w")));
+    const auto fit = run_ssrfleet("fit " + q(log) + window + " --out " + q(dir.file("w.json")), dir);
+    CHECK(fit.status == 64);
+    CHECK(fit.err.find("--window is not an option of fit") != std::string::npos);
+  }
 }
 
 TEST_CASE("a second stream on a live state exits at once with status 75 and the first goes on unharmed",

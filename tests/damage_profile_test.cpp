@@ -1,4 +1,4 @@
-// The damage along the road (issue 18 item 1) against known answers: a deterministic IF pattern
+// The damage along the road against known answers: a deterministic IF pattern
 // gives the closed form, a fleet without spread gives the single vehicle's value, and normally
 // distributed forces give Eisenmann's road stress factor E[IF^4] = 1 + 6 DLC² + 3 DLC⁴.
 #include <cmath>

@@ -1,5 +1,5 @@
-// Per-site sensor calibration fitted beside the fleet (discrepancy/sensor_calibration.hpp; issue 21
-// item 1): the M-step finds a miscalibrated sensor, the EM recovers its gain and the sites' others,
+// Per-site sensor calibration fitted beside the fleet (discrepancy/sensor_calibration.hpp):
+// the M-step finds a miscalibrated sensor, the EM recovers its gain and the sites' others,
 // the result does not depend on the thread count, and bad options are refused.
 #include <cmath>
 #include <memory>

@@ -1,4 +1,4 @@
-// Which site's fleet differs (discrepancy/site_conflicts.hpp; issue 21 item 2): five simulated
+// Which site's fleet differs (discrepancy/site_conflicts.hpp): five simulated
 // sites, one of them carrying another fleet, and the same five with one fleet.
 #include <cmath>
 #include <memory>

@@ -1,4 +1,4 @@
-// Several sites, one fleet (fleet/joint_sites.hpp; issue 21 item 1): the per-site constants of the
+// Several sites, one fleet (fleet/joint_sites.hpp): the per-site constants of the
 // marginal likelihood, the merge of the sites' logs, and the joint posterior: sharper than each
 // site's alone, covering the truth, and as reproducible as a fit of one site.
 #include <algorithm>

@@ -281,7 +281,7 @@ Moments weighted_moments(const Eigen::VectorXd& x, const Eigen::ArrayXd& w) {
 
 }  // namespace
 
-// Issue 15: one fleet model for every algorithm. For every registered extension, on one simulated
+// One fleet model for every algorithm. For every registered extension, on one simulated
 // log with that extension's effect hidden in it, the latent SMC core and the batch MCMC, each fitting
 // the extension, must give the same posterior means of the 7 hyperparameters and of every ψ
 // component, within 0.25 posterior sd.

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 #include <catch2/catch.hpp>
@@ -198,13 +199,10 @@ TEST_CASE("the SMC survives the paper's literal noise variance 0.2 where particl
   CHECK(s[fleet::kSigmaIf].q975 >= std::sqrt(0.2));
 }
 
-TEST_CASE("a checkpoint restored into a fresh sampler continues bit-identically in exact and windowed mode",
-          "[fleet][smc][stream]") {
+TEST_CASE("a checkpoint restored into a fresh sampler continues bit-identically", "[fleet][smc][stream]") {
   Case c(15, 9);
-  for (Eigen::Index window : {Eigen::Index{0}, Eigen::Index{5}}) {
-    INFO("window " << window);
-    auto options = smc_options(64, 2, 3);
-    options.window = window;
+  {
+    const auto options = smc_options(64, 2, 3);
     fleet::FleetSmc straight(c.site, options);
     for (const auto& r : c.log.records) straight.absorb(r);
 
@@ -222,8 +220,46 @@ TEST_CASE("a checkpoint restored into a fresh sampler continues bit-identically 
     CHECK((resumed.cloud().weights == straight.cloud().weights).all());
     CHECK(resumed.cloud().log_evidence == straight.cloud().log_evidence);
     CHECK(resumed.trucks_seen() == 15);
-    // Bounded memory: only the window's latents (plus the newest truck) are kept.
-    CHECK(straight.target().kept_trucks() == (window > 0 ? window + 1 : 15));
+    CHECK(straight.target().kept_trucks() == 15);
+  }
+}
+
+// The latent core once had a bounded-memory mode (a window of trucks whose latents it kept); its
+// checkpoint layout keeps that mode's fields, written as "off". A state written with a window must
+// be refused by name, never resumed as if its trucks were all there.
+TEST_CASE("a latent checkpoint written with a window is refused, naming the window", "[fleet][smc][stream]") {
+  Case c(4, 9);
+  const auto options = smc_options(32, 1, 3);
+  fleet::FleetSmc fit(c.site, options);
+  for (const auto& r : c.log.records) fit.absorb(r);
+  std::stringstream checkpoint;
+  BinaryWriter writer(checkpoint);
+  fit.save(writer);
+  std::string bytes = checkpoint.str();
+  // The target's part begins with particles (int64), sensors (int32) and the window (int64, 0).
+  std::string head(sizeof(std::int64_t) + sizeof(std::int32_t) + sizeof(std::int64_t), '\0');
+  const std::int64_t particles = 32, window = 0;
+  const std::int32_t sensors = c.site.sensors();
+  std::memcpy(head.data(), &particles, sizeof particles);
+  std::memcpy(head.data() + sizeof particles, &sensors, sizeof sensors);
+  std::memcpy(head.data() + sizeof particles + sizeof sensors, &window, sizeof window);
+  const auto at = bytes.find(head);
+  REQUIRE(at != std::string::npos);
+  REQUIRE(bytes.find(head, at + 1) == std::string::npos);
+  const std::int64_t windowed = 20;
+  std::memcpy(bytes.data() + at + sizeof particles + sizeof sensors, &windowed, sizeof windowed);
+  std::stringstream in(bytes);
+  BinaryReader reader(in, "state/checkpoint.bin");
+  fleet::FleetSmc resumed(c.site, options);
+  try {
+    resumed.restore(reader);
+    FAIL("a windowed checkpoint was resumed");
+  } catch (const DataError& e) {
+    const std::string what = e.what();
+    INFO(what);
+    CHECK(what.find("--window 20") != std::string::npos);
+    CHECK(what.find("replay the log") != std::string::npos);
+    CHECK(what.find("state/checkpoint.bin") != std::string::npos);
   }
 }
 

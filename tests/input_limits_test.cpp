@@ -1,4 +1,4 @@
-// Issue 20 item 8, absurd inputs fail fast: a 1 GB line, a million columns, a billion trucks or
+// Absurd inputs fail fast: a 1 GB line, a million columns, a billion trucks or
 // particles, a surface of 1e12 points are each a clear error (file, line, field) within a second,
 // never an out-of-memory kill. The limits are in util/line_reader.hpp and docs/site-data.md.
 #include <algorithm>

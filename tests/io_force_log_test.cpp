@@ -1,4 +1,4 @@
-// The force log that weigh reads (issue 18 items 2 and 4): sprung mass optional, and every bad
+// The force log that weigh reads: sprung mass optional, and every bad
 // input a DataError naming file, line and field.
 #include <sstream>
 #include <string>

@@ -1,4 +1,4 @@
-// The posterior file's checksum (issue 20 item 4): a file cut short or with a byte changed is a
+// The posterior file's checksum: a file cut short or with a byte changed is a
 // DataError naming the file, never a wrong posterior; re-indenting it, or a file without a
 // checksum, still reads.
 #include <algorithm>

@@ -1,4 +1,4 @@
-// The site manifest's reader (issue 21 items 1 and 6): paths relative to the manifest's folder,
+// The site manifest's reader: paths relative to the manifest's folder,
 // and every bad manifest a DataError naming the manifest, the field and the site.
 #include <chrono>
 #include <fstream>

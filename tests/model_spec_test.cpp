@@ -1,4 +1,4 @@
-// Model specs (issue 17): effects joined by '+', a parameter given is fixed, one left out is
+// Model specs: effects joined by '+', a parameter given is fixed, one left out is
 // fitted. The composition against its components applied one after the other, and the errors.
 #include <cmath>
 #include <string>

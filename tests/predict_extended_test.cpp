@@ -1,4 +1,4 @@
-// predict with a fitted model's effects (issue 17 item 1; model/physical_effects.hpp): the
+// predict with a fitted model's effects (model/physical_effects.hpp): the
 // vehicle and traffic effects change the predicted force, the sensors' calibration does not, a
 // road defect stays on its road, and a replaced stiffness distribution is drawn from; damage keeps
 // the same, weigh the whole model (the forces it weighs went through the sensors).

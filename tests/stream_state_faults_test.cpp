@@ -1,4 +1,4 @@
-// The stream's state directory under write failures (issue 20, item 5): a full disk at every
+// The stream's state directory under write failures: a full disk at every
 // single write the state depends on, then an exact resume; and the history database it keeps.
 #include <atomic>
 #include <filesystem>

@@ -1,4 +1,4 @@
-// Vehicle classes (issue 18 item 3): the class column, a posterior per class, mixtures by traffic
+// Vehicle classes: the class column, a posterior per class, mixtures by traffic
 // share in predict and damage, class-labelled streams, mixed fleets in simulate.
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// The SSR-corrected static-weight estimator (issue 18 item 2): the combination's algebra, the
+// The SSR-corrected static-weight estimator: the combination's algebra, the
 // fixed point over the unknown sprung mass, and on simulated trucks an unbiased estimate whose
 // 95 % intervals cover the truth as often as they say.
 #include <cmath>

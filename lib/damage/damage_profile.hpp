@@ -1,4 +1,4 @@
-// The damage a fleet does along the road (issue 18 item 1): from the posterior predictive trucks
+// The damage a fleet does along the road: from the posterior predictive trucks
 // (fleet/predictive_trucks.hpp, the same draws as the SSR prediction) simulated through the site,
 // the damage amplification a_n = E[IF^n] for n = 1, 4 and any further n, the dynamic load
 // coefficient, hot spots and the expected damage in equivalent standard axles

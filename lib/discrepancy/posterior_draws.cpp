@@ -13,10 +13,6 @@ PosteriorDraws posterior_draws(const site::Site& site, const fleet::FleetSmc& fi
                                int threads) {
   const fleet::FleetTarget& target = fit.target();
   const Eigen::Index n = target.kept_trucks();
-  if (n != target.trucks()) {
-    throw DataError("posterior checks need every truck's latents; the fit kept " + std::to_string(n) + " of " +
-                    std::to_string(target.trucks()) + " (windowed mode)");
-  }
   if (draws < 1) throw UsageError("posterior checks: draws must be at least 1");
   const int M = site.sensors();
   PosteriorDraws out;

@@ -1,4 +1,4 @@
-// Which site's fleet differs from the others' (issue 21 item 2)? A fit of many sites shares one
+// Which site's fleet differs from the others'? A fit of many sites shares one
 // fleet; a site whose trucks come from another fleet (another operator's vehicles, another axle
 // mix) pulls the shared posterior and should be named, not averaged in.
 //

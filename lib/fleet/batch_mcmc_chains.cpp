@@ -8,20 +8,18 @@
 
 #include "smc/rng.hpp"
 #include "util/errors.hpp"
+#include "util/option_rules.hpp"
 #include "util/stop_token.hpp"
 
 namespace ssrfleet::fleet {
 
 bool BatchMcmcChainsOptions::IsValid(std::string* error) const {
-  if (chains < 1 || chains > 64) {
-    if (error) *error = "chains = " + std::to_string(chains) + " must be in [1, 64]";
-    return false;
-  }
-  if (!(start_dispersion >= 0.0 && start_dispersion <= 10.0)) {
-    if (error) *error = "start_dispersion must be in [0, 10]";
-    return false;
-  }
-  return chain.IsValid(error);
+  util::OptionRules rules("BatchMcmcChainsOptions", error);
+  rules.require(chains >= 1 && chains <= 64, "chains", chains, "in [1, 64]");
+  rules.require(start_dispersion >= 0.0 && start_dispersion <= 10.0, "start_dispersion", start_dispersion, "in [0, 10]");
+  std::string chain_error;
+  rules.nested(chain.IsValid(&chain_error), chain_error);
+  return rules.passed();
 }
 
 std::uint64_t chain_seed(std::uint64_t seed, int chain) {

@@ -15,7 +15,6 @@ FleetTarget::Options target_options(const FleetSmc::Options& o) {
   FleetTarget::Options t;
   t.particles = o.sampler.particles;
   t.prior = o.prior;
-  t.window = o.window;
   t.extension = o.extension;
   t.proposals = o.proposals;
   t.proposal_draws = o.proposal_draws;
@@ -73,7 +72,7 @@ smc::MoveSchedule FleetSmc::move_schedule(const Options& o) {
 }
 
 FleetSmc::FleetSmc(const site::Site& site, Options options)
-    : site_(site), target_(site, target_options(options)), sampler_(with_schedule(options)), window_(options.window),
+    : site_(site), target_(site, target_options(options)), sampler_(with_schedule(options)),
       parallel_(options.sampler.threads) {
   target_.initialise(sampler_.model_rngs().child(kInitialDraws));
 }
@@ -81,7 +80,6 @@ FleetSmc::FleetSmc(const site::Site& site, Options options)
 const smc::StageSummary& FleetSmc::absorb(const records::WimRecord& record) {
   target_.add_truck(record, sampler_.model_rngs().child(kNewTruckDraws), parallel_);
   truck_ids_.push_back(record.truck_id);
-  if (window_ > 0 && truck_ids_.size() > FleetTarget::kPredictionPool) truck_ids_.pop_front();
   sampler_.run_stage(target_, "truck '" + record.truck_id + "' (#" + std::to_string(target_.trucks()) + ")");
   return sampler_.history().back();
 }
@@ -115,7 +113,7 @@ void FleetSmc::restore(BinaryReader& in) {
     }
     if (v == 2 || v == 4) {
       return "checkpoint format version " + std::to_string(v) +
-             " is the marginal core's, not the latent core's (3): resume it without --window";
+             " is the marginal core's, not the latent core's (3): resume it with the model it was written with";
     }
     return "unsupported checkpoint format version " + std::to_string(v);
   });

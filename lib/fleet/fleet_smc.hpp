@@ -36,7 +36,6 @@ class FleetSmc {
     // σ_kt within a quarter posterior sd of a long MCMC on the paper's case; one left them 0.4 sd low.
     int older_sweeps = 2;
     PriorBounds prior;
-    Eigen::Index window = 0;  // FleetTarget::Options::window: 0 = exact, W = bounded memory
     // FleetTarget::Options::extension: an effect fitted alongside θ (not owned; outlives this).
     const ModelExtension* extension = nullptr;
     // FleetTarget::Options::proposals: a new truck's latents from its table (new_truck_proposals.hpp;
@@ -87,8 +86,7 @@ class FleetSmc {
   const FleetTarget& target() const { return target_; }
   const smc::TemperedSampler& sampler() const { return sampler_; }
   PosteriorCloud cloud() const;
-  // Ids of the trucks absorbed: all of them, or in windowed mode the most recent
-  // FleetTarget::kPredictionPool (a resume then skips older records by line number).
+  // Ids of the trucks absorbed, in order.
   const std::deque<std::string>& truck_ids() const { return truck_ids_; }
 
   // Checkpoint of everything the next truck depends on (sampler state, particles, data), so a
@@ -101,7 +99,6 @@ class FleetSmc {
   const site::Site& site_;
   FleetTarget target_;
   smc::TemperedSampler sampler_;
-  Eigen::Index window_ = 0;
   smc::ParallelFor parallel_;  // for the model's own work between stages (same threads as the engine)
   std::deque<std::string> truck_ids_;
 };

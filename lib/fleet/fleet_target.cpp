@@ -31,13 +31,6 @@ FleetTarget::FleetTarget(const site::Site& site, Options options)
   if (options_.particles < 2) {
     throw UsageError("fleet target: particles is " + std::to_string(options_.particles) + ", but must be at least 2");
   }
-  if (options_.window < 0) throw UsageError("fleet target: window must be >= 0");
-  if (options_.extension != nullptr && options_.window > 0) {
-    throw UsageError("fleet target: a model extension needs the exact regime (window 0)");
-  }
-  if (options_.proposals != nullptr && options_.window > 0) {
-    throw UsageError("fleet target: new-truck proposals need the exact regime (window 0)");
-  }
   if (!(options_.defensive_share > 0.0 && options_.defensive_share < 1.0)) {
     throw UsageError("fleet target: the defensive share of a new truck's proposal must be in (0, 1)");
   }
@@ -45,7 +38,6 @@ FleetTarget::FleetTarget(const site::Site& site, Options options)
   theta_.resize(kHyperCount, options_.particles);
   psi_.resize(options_.extension != nullptr ? options_.extension->dim() : 0, options_.particles);
   sums_ = Eigen::MatrixXd::Zero(kSumCount, options_.particles);
-  retired_ = Eigen::MatrixXd::Zero(kSumCount, options_.particles);
 }
 
 HyperVector FleetTarget::theta_of(Eigen::Index particle) const {
@@ -73,13 +65,9 @@ void FleetTarget::initialise(const smc::RngFactory& rngs) {
   latents_.resize(0, options_.particles);
   ssr_.resize(0, options_.particles);
   sums_.setZero();
-  retired_.setZero();
-  total_trucks_ = 0;
   speed_mps_.clear();
   sprung_mass_kg_.clear();
   observed_if_.clear();
-  pool_speed_mps_.clear();
-  pool_sprung_mass_kg_.clear();
   older_scale_.clear();
   newest_from_proposals_ = false;
 }
@@ -91,13 +79,6 @@ void FleetTarget::add_truck(const records::WimRecord& record, const smc::RngFact
                     " impact factors but the site has " + std::to_string(sensors_) + " sensors");
   }
   const Eigen::Index n = kept_trucks();
-  ++total_trucks_;
-  pool_speed_mps_.push_back(record.speed_mps);
-  pool_sprung_mass_kg_.push_back(record.sprung_mass_kg);
-  if (options_.window > 0 && pool_speed_mps_.size() > kPredictionPool) {
-    pool_speed_mps_.pop_front();
-    pool_sprung_mass_kg_.pop_front();
-  }
   speed_mps_.push_back(record.speed_mps);
   sprung_mass_kg_.push_back(record.sprung_mass_kg);
   observed_if_.push_back(record.impact_factor);
@@ -117,7 +98,6 @@ void FleetTarget::add_truck(const records::WimRecord& record, const smc::RngFact
     draw_newest_from_proposals(record, rngs, parallel);
   }
   older_scale_.resize(static_cast<std::size_t>(n), 1.0);  // the truck that was newest joins the older ones
-  if (options_.window > 0 && kept_trucks() > options_.window + 1) retire_oldest_kept_truck();
   // The previous newest truck is an older one now: fold it into the running sums.
   for (Eigen::Index i = 0; i < P; ++i) recompute_sums(i);
 }
@@ -136,9 +116,9 @@ void FleetTarget::prior_latents(Eigen::Index i, smc::Rng& rng, double* x) const 
 void FleetTarget::draw_newest_from_proposals(const records::WimRecord& record, const smc::RngFactory& rngs,
                                              const smc::ParallelFor& parallel) {
   const Eigen::Index P = options_.particles, newest = kept_trucks() - 1, m = options_.proposal_draws;
-  const auto arrival = static_cast<std::size_t>(total_trucks_ - 1);
+  const auto arrival = static_cast<std::size_t>(kept_trucks() - 1);
   if (!options_.proposals->matches(arrival, record.speed_mps, record.sprung_mass_kg)) {
-    throw UsageError("fleet target: truck '" + record.truck_id + "' (#" + std::to_string(total_trucks_) +
+    throw UsageError("fleet target: truck '" + record.truck_id + "' (#" + std::to_string(kept_trucks()) +
                      ") is not the truck its proposals were built for (another log, or another order)");
   }
   const double log_table_share = std::log1p(-options_.defensive_share), log_prior_share = std::log(options_.defensive_share);
@@ -207,30 +187,11 @@ void FleetTarget::draw_newest_from_proposals(const records::WimRecord& record, c
   passes_ += P * m;
 }
 
-void FleetTarget::retire_oldest_kept_truck() {
-  for (Eigen::Index i = 0; i < options_.particles; ++i) {
-    const double k = latents_(kStiffness, i), kt = latents_(kTyreStiffness, i), z = latents_(kLateral, i);
-    retired_(kSumK, i) += k;
-    retired_(kSumK2, i) += k * k;
-    retired_(kSumKt, i) += kt;
-    retired_(kSumKt2, i) += kt * kt;
-    retired_(kSumZ, i) += z;
-    retired_(kSumZ2, i) += z * z;
-    retired_(kSumSsr, i) += ssr_(0, i);
-  }
-  latents_ = latents_.bottomRows(latents_.rows() - 3).eval();
-  ssr_ = ssr_.bottomRows(ssr_.rows() - 1).eval();
-  speed_mps_.erase(speed_mps_.begin());
-  sprung_mass_kg_.erase(sprung_mass_kg_.begin());
-  observed_if_.erase(observed_if_.begin());
-  older_scale_.erase(older_scale_.begin());
-}
-
 Eigen::MatrixXd FleetTarget::truck_latents(Eigen::Index truck) const { return latents_.middleRows(3 * truck, 3); }
 
 void FleetTarget::recompute_sums(Eigen::Index i) {
   double s[kSumCount];
-  for (int c = 0; c < kSumCount; ++c) s[c] = retired_(c, i);
+  for (double& v : s) v = 0.0;
   for (Eigen::Index j = 0; j + 1 < kept_trucks(); ++j) {
     const double k = latents_(3 * j + kStiffness, i), kt = latents_(3 * j + kTyreStiffness, i),
                  z = latents_(3 * j + kLateral, i);
@@ -427,82 +388,7 @@ void FleetTarget::resample(const std::vector<Eigen::Index>& ancestors) {
   latents_ = latents_(Eigen::all, ancestors).eval();
   ssr_ = ssr_(Eigen::all, ancestors).eval();
   sums_ = sums_(Eigen::all, ancestors).eval();
-  retired_ = retired_(Eigen::all, ancestors).eval();
   if (newest_from_proposals_) newest_log_zhat_ = newest_log_zhat_(ancestors).eval();
 }
-
-void FleetTarget::save(BinaryWriter& out) const {
-  out.value<std::int64_t>(options_.particles);
-  out.value<std::int32_t>(sensors_);
-  out.value<std::int64_t>(options_.window);
-  out.value<std::int64_t>(total_trucks_);
-  out.matrix(retired_);
-  out.value<std::uint64_t>(pool_speed_mps_.size());
-  for (std::size_t j = 0; j < pool_speed_mps_.size(); ++j) {
-    out.value(pool_speed_mps_[j]);
-    out.value(pool_sprung_mass_kg_[j]);
-  }
-  out.value<std::int64_t>(kept_trucks());
-  for (Eigen::Index j = 0; j < kept_trucks(); ++j) {
-    out.value(speed_mps_[static_cast<std::size_t>(j)]);
-    out.value(sprung_mass_kg_[static_cast<std::size_t>(j)]);
-    out.matrix(observed_if_[static_cast<std::size_t>(j)]);
-  }
-  out.matrix(theta_);
-  out.matrix(latents_);
-  out.matrix(ssr_);
-  out.value<std::uint64_t>(older_scale_.size());
-  for (double v : older_scale_) out.value(v);
-  out.value(interweave_scale_);
-  if (psi_.rows() > 0) {  // only with an extension, so checkpoints without one keep their format
-    out.matrix(psi_);
-    out.value(extension_scale_);
-    out.value(stiffness_scale_);
-  }
-}
-
-void FleetTarget::load(BinaryReader& in) {
-  const Eigen::Index P = options_.particles;
-  if (in.value<std::int64_t>("particles") != P) in.fail("particles", "saved with another particle count");
-  if (in.value<std::int32_t>("sensors") != sensors_) in.fail("sensors", "saved for another sensor count");
-  if (in.value<std::int64_t>("window") != options_.window) in.fail("window", "saved with another --window");
-  total_trucks_ = in.value<std::int64_t>("total_trucks");
-  retired_ = in.matrix("retired", kSumCount, P);
-  const auto pool = in.value<std::uint64_t>("pool");
-  if (pool > static_cast<std::uint64_t>(total_trucks_)) in.fail("pool", "larger than the trucks absorbed");
-  pool_speed_mps_.clear();
-  pool_sprung_mass_kg_.clear();
-  for (std::uint64_t j = 0; j < pool; ++j) {
-    pool_speed_mps_.push_back(in.value<double>("pool_speed_mps"));
-    pool_sprung_mass_kg_.push_back(in.value<double>("pool_sprung_mass_kg"));
-  }
-  const auto n = in.value<std::int64_t>("trucks");
-  if (n > total_trucks_) in.fail("trucks", "more kept trucks than absorbed");
-  if (n < 0 || n > 100'000'000) in.fail("trucks", "implausible truck count");
-  speed_mps_.clear();
-  sprung_mass_kg_.clear();
-  observed_if_.clear();
-  for (std::int64_t j = 0; j < n; ++j) {
-    speed_mps_.push_back(in.value<double>("speed_mps"));
-    sprung_mass_kg_.push_back(in.value<double>("sprung_mass_kg"));
-    observed_if_.push_back(in.matrix("impact_factor", sensors_, 1));
-  }
-  theta_ = in.matrix("theta", kHyperCount, P);
-  latents_ = in.matrix("latents", 3 * n, P);
-  ssr_ = in.matrix("ssr", n, P);
-  const auto scales = in.value<std::uint64_t>("older_scale");
-  if (scales != static_cast<std::uint64_t>(n > 0 ? n - 1 : 0)) in.fail("older_scale", "size does not match the trucks");
-  older_scale_.assign(scales, 1.0);
-  for (auto& v : older_scale_) v = in.value<double>("older_scale");
-  interweave_scale_ = in.value<double>("interweave_scale");
-  if (psi_.rows() > 0) {
-    psi_ = in.matrix("psi", psi_.rows(), P);
-    extension_scale_ = in.value<double>("extension_scale");
-    stiffness_scale_ = in.value<double>("stiffness_scale");
-  }
-  for (Eigen::Index i = 0; i < P; ++i) recompute_sums(i);
-  newest_from_proposals_ = false;  // a checkpoint falls between stages, where the proposals play no part
-}
-
 
 }  // namespace ssrfleet::fleet

@@ -45,20 +45,14 @@ class FleetTarget final : public smc::TemperedModel {
   struct Options {
     Eigen::Index particles = 1024;
     PriorBounds prior;
-    // Bounded memory: keep the latents of only the newest `window` older trucks per particle;
-    // an older truck leaving the window is folded into per-particle sufficient statistics
-    // (Σk, Σk², Σk_t, Σk_t², Σz, Σz², ΣSSR) and its latents are frozen from then on. 0 = exact
-    // (every truck's latents kept and moved, memory growing with the stream).
-    Eigen::Index window = 0;
     // An optional model extension (docs/model.md): its parameters ψ join θ in every particle,
     // drawn from their prior before the first truck, and move by the model moves "extension jump"
     // (the extension's own jump between distant modes, ModelExtension::jump, if it has one) and
     // "extension random walk", each sweep re-simulating every kept truck (n passes per particle).
     // An extension that replaces the fleet's stiffness distribution (second_class) changes the
     // density of every truck's k instead, and (K, σ_k, ψ) move by "stiffness distribution", a
-    // random walk on their conditional, with no integrator call. Needs the exact regime
-    // (window 0): a retired truck's residuals cannot be recomputed at a new ψ. Not owned; must
-    // outlive the target.
+    // random walk on their conditional, with no integrator call. Not owned; must outlive the
+    // target.
     const ModelExtension* extension = nullptr;
     // Optional: where a new truck's latents are drawn from instead of p(x | θ) (new_truck_proposals.hpp
     // says why). Each particle draws `proposal_draws` latents x_1..x_m from the defensive mixture
@@ -73,7 +67,7 @@ class FleetTarget final : public smc::TemperedModel {
     // φ = 1 that extended target is not the one the moves keep, so nothing moves there ("theta"
     // and "stiffness distribution" report that they did not run, and the stage has no random-walk
     // block: the newest truck moves with the older ones from the next stage on). Not owned; must
-    // outlive the target. Needs the exact regime (window 0).
+    // outlive the target.
     const NewTruckProposals* proposals = nullptr;
     double defensive_share = 0.1;
     int proposal_draws = 16;
@@ -93,12 +87,12 @@ class FleetTarget final : public smc::TemperedModel {
   // likelihood the increment of the next stage. The record's sensor count must match the site.
   void add_truck(const records::WimRecord& record, const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
 
-  Eigen::Index trucks() const { return total_trucks_; }              // absorbed so far
-  Eigen::Index kept_trucks() const { return static_cast<Eigen::Index>(speed_mps_.size()); }  // with latents
+  Eigen::Index trucks() const { return kept_trucks(); }              // absorbed so far
+  Eigen::Index kept_trucks() const { return static_cast<Eigen::Index>(speed_mps_.size()); }  // every one keeps its latents
   const Eigen::MatrixXd& theta() const { return theta_; }  // 7 x P
   const Eigen::MatrixXd& psi() const { return psi_; }      // extension parameters: dim x P (0 rows without one)
   const ModelExtension* extension() const { return options_.extension; }
-  // The data of the kept trucks (all of them in the exact regime), oldest first.
+  // The data of every truck absorbed, oldest first.
   const std::vector<double>& kept_speed_mps() const { return speed_mps_; }
   const std::vector<double>& kept_sprung_mass_kg() const { return sprung_mass_kg_; }
   const std::vector<Eigen::VectorXd>& kept_observed_if() const { return observed_if_; }
@@ -107,12 +101,10 @@ class FleetTarget final : public smc::TemperedModel {
   // Every kept truck's latents: 3n x P, rows 3j..3j+2 = (k, k_t, z) of kept truck j.
   const Eigen::MatrixXd& latents() const { return latents_; }
   const Eigen::MatrixXd& sums_of_squared_residuals() const { return ssr_; }  // trucks x P
-  // Observed speeds and sprung masses for predictions: every truck, or in windowed mode the
-  // last kPredictionPool of them (so memory stays flat).
+  // Observed speeds and sprung masses for predictions: every truck's.
   std::pair<std::vector<double>, std::vector<double>> observed_speeds_and_masses() const {
-    return {{pool_speed_mps_.begin(), pool_speed_mps_.end()}, {pool_sprung_mass_kg_.begin(), pool_sprung_mass_kg_.end()}};
+    return {speed_mps_, sprung_mass_kg_};
   }
-  static constexpr std::size_t kPredictionPool = 10000;
   long long integrator_passes() const { return passes_; }
   double older_acceptance() const { return older_acceptance_; }
   double extension_acceptance() const { return extension_acceptance_; }
@@ -137,7 +129,7 @@ class FleetTarget final : public smc::TemperedModel {
   void accept(int block, const std::vector<char>& accepted,
               const Eigen::Ref<const Eigen::MatrixXd>& proposed) override;
   bool moves_every_step() const override {
-    return newest_from_proposals_ && total_trucks_ <= options_.every_stage_moves_until;
+    return newest_from_proposals_ && kept_trucks() <= options_.every_stage_moves_until;
   }
   void resample(const std::vector<Eigen::Index>& ancestors) override;
   // The model moves, by name (in model_moves() order):
@@ -177,7 +169,7 @@ class FleetTarget final : public smc::TemperedModel {
   void rejuvenate(int sweeps, const smc::RngFactory& rngs, const smc::ParallelFor& parallel);
 
  private:
-  // Running sums over every truck before the newest (retired and kept), per particle.
+  // Running sums over every truck before the newest, per particle.
   enum Sum : int { kSumK = 0, kSumK2, kSumKt, kSumKt2, kSumZ, kSumZ2, kSumSsr, kSumCount };
 
   // log γ of particle i at θ with the newest truck's latents at newest_latents.
@@ -247,8 +239,7 @@ class FleetTarget final : public smc::TemperedModel {
   // The centred Gibbs draw of "theta" cannot leave the funnel where every k_t sits at K_t and
   // σ_kt is small (speed_bias, whose factor trades against K_t, showed it: one SMC seed kept 10 %
   // of its weight there, the MCMC 0.8 %). Writes log γ and ℓ of every particle that moved.
-  // Does nothing outside the exact regime (a retired truck's k_t cannot be re-simulated), nor
-  // when every particle is the same point (K_t, σ_kt): false then.
+  // Does nothing when every particle is the same point (K_t, σ_kt): false then.
   bool tyre_stiffness_interweave(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
                                  Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik);
 
@@ -258,7 +249,6 @@ class FleetTarget final : public smc::TemperedModel {
   int sensors_ = 0;
   // log p(θ) anywhere inside the prior box (PriorBounds::log_prior's sum of logs, computed once).
   double log_prior_inside_ = 0.0;
-  void retire_oldest_kept_truck();
 
   // Observed data per kept truck.
   std::vector<double> speed_mps_, sprung_mass_kg_;
@@ -269,9 +259,6 @@ class FleetTarget final : public smc::TemperedModel {
   Eigen::MatrixXd latents_;  // 3n x P: rows 3j..3j+2 = (k, k_t, z) of truck j
   Eigen::MatrixXd ssr_;      // n x P: sum of squared residuals of truck j
   Eigen::MatrixXd sums_;     // kSumCount x P (trucks before the newest)
-  Eigen::MatrixXd retired_;  // kSumCount x P: the part of sums_ from trucks out of the window
-  Eigen::Index total_trucks_ = 0;
-  std::deque<double> pool_speed_mps_, pool_sprung_mass_kg_;
   Eigen::ArrayXd proposed_ssr_;       // SSR at the last proposals of the newest truck's block
   std::vector<double> older_scale_;   // per older truck: adapted proposal multiplier
   // Whether the newest truck came from Options::proposals (until the next add_truck or load), and

@@ -167,7 +167,7 @@ void FleetTarget::theta_moves(double phi, const smc::RngFactory& rngs, const smc
 bool FleetTarget::tyre_stiffness_interweave(double phi, const smc::RngFactory& rngs, const smc::ParallelFor& parallel,
                                             Eigen::Ref<Eigen::ArrayXd> log_base, Eigen::Ref<Eigen::ArrayXd> loglik) {
   const Eigen::Index P = options_.particles, n = kept_trucks(), newest = n - 1;
-  if (n < 2 || n != total_trucks_) return false;
+  if (n < 2) return false;
   // The walk in (K_t, log σ_kt), on the cloud's spread (equal weights: this runs right after a
   // stage, whatever the weights), times a multiplier adapted on acceptance. The cloud's spread is
   // the marginal posterior's; the conditional given ε is narrower, which the multiplier takes up.

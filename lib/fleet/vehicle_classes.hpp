@@ -1,4 +1,4 @@
-// Vehicle classes (issue 18 item 3): one independent fleet posterior per class, combined as a
+// Vehicle classes: one independent fleet posterior per class, combined as a
 // mixture by traffic share. A log without labels is one class with the empty label, and every
 // command then behaves exactly as before classes existed.
 //

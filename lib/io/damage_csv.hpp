@@ -1,4 +1,4 @@
-// The damage CSV of `ssrfleet damage` (issue 18 item 1): header exactly
+// The damage CSV of `ssrfleet damage`: header exactly
 // position_m,dlc,a1,a1_q025,a1_q975,a4,a4_q025,a4_q975, then a{n},a{n}_q025,a{n}_q975 for each
 // further power n, then hot_spot (0/1). One row per position. Formats only: damage/ computes.
 #pragma once

@@ -1,4 +1,4 @@
-// The tyre-force WIM log that `ssrfleet weigh` reads (issue 18 item 2): the force_1..force_M form
+// The tyre-force WIM log that `ssrfleet weigh` reads: the force_1..force_M form
 // of the WIM log of docs/site-data.md (header first, '#' lines are comments; `truck_id`, `time_s`
 // optional, `speed_mps`, then `force_1`..`force_M` in N), except that `sprung_mass_kg` may be
 // absent: the static weight is what weigh estimates. Extra columns are ignored.

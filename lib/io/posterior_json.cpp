@@ -13,7 +13,9 @@
 #include <utility>
 
 #include "io/atomic_file.hpp"
+#include "io/json_fields.hpp"
 #include "io/posterior_convergence_json.hpp"
+#include "io/posterior_json_sites.hpp"
 #include "model/fleet_model.hpp"
 #include "records/vehicle_class.hpp"
 #include "site/sensor_array.hpp"
@@ -29,7 +31,7 @@ constexpr int kClassesFormatVersion = 2;  // a file of vehicle classes
 // JSON has no NaN: a quantity that does not apply (MCMC log-evidence) is written as null.
 nlohmann::json number_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 
-// The file's own checksum (issue 20 item 4): FNV-1a 64 of the compact dump of everything but
+// The file's own checksum: FNV-1a 64 of the compact dump of everything but
 // "checksum". The dump is canonical (object keys sorted, each double in its shortest round-trip
 // form), so a parsed file dumps to the very text its writer hashed; a changed value changes it,
 // while re-indenting the file does not.
@@ -143,146 +145,11 @@ void write_posterior_file(const std::string& path, const fleet::PosteriorCloud& 
   write_file_atomically(path, [&](std::ostream& os) { os << text; });
 }
 
-namespace {
-template <class T>
-T get_field(const nlohmann::json& j, const char* key, const std::string& file, const std::string& where) {
-  if (!j.is_object() || !j.contains(key)) throw DataError(file, 0, where + key, "missing");
-  const nlohmann::json& v = j.at(key);
-  if constexpr (std::is_integral_v<T>) {
-    // nlohmann converts any number to an integer by a plain cast, undefined behaviour for 1e300
-    // (UBSan, found by fuzz/posterior_json_fuzzer): take whole numbers in T's range only.
-    const bool fits = v.is_number_unsigned()
-                          ? v.get<std::uint64_t>() <= static_cast<std::uint64_t>(std::numeric_limits<T>::max())
-                          : v.is_number_integer() && std::cmp_greater_equal(v.get<std::int64_t>(), std::numeric_limits<T>::min()) &&
-                                std::cmp_less_equal(v.get<std::int64_t>(), std::numeric_limits<T>::max());
-    if (!fits) {
-      throw DataError(file, 0, where + key,
-                      "must be a whole number from " + std::to_string(std::numeric_limits<T>::min()) + " to " +
-                          std::to_string(std::numeric_limits<T>::max()) + ", found " + v.dump());
-    }
-    return v.is_number_unsigned() ? static_cast<T>(v.get<std::uint64_t>()) : static_cast<T>(v.get<std::int64_t>());
-  } else {
-    try {
-      return v.get<T>();
-    } catch (const nlohmann::json::exception&) {
-      throw DataError(file, 0, where + key, "has the wrong type");
-    }
-  }
-}
-
-// An array of finite numbers at j[key], named where + key in messages.
-std::vector<double> finite_numbers(const nlohmann::json& j, const char* key, const std::string& file,
-                                   const std::string& where) {
-  auto v = get_field<std::vector<double>>(j, key, file, where);
-  for (double x : v) {
-    if (!std::isfinite(x)) throw DataError(file, 0, where + key, "holds a non-finite number");
-  }
-  return v;
-}
-
-// The same for an array of the cloud (P prefixes the object's fields).
-std::vector<double> finite_array(const nlohmann::json& j, const char* key, const std::string& file, const std::string& P) {
-  return finite_numbers(j, key, file, P + "cloud.");
-}
-}  // namespace
+using json_fields::finite_array;
+using json_fields::finite_numbers;
+using json_fields::get_field;
 
 namespace {
-// The sites of a fit over several (posterior_cloud.hpp, CloudSite), after the pool is read: each
-// site's pool a range of it, the ranges in order and covering it, the names distinct.
-void parse_sites(const nlohmann::json& sites, const std::string& path, const std::string& where,
-                 fleet::PosteriorCloud& c) {
-  if (!sites.is_array() || sites.size() < 2) throw DataError(path, 0, where, "must list at least two sites");
-  if (sites.size() > kMaxPosteriorSites) {
-    throw DataError(path, 0, where, "lists " + std::to_string(sites.size()) + " sites, more than this build reads (" +
-                                        std::to_string(kMaxPosteriorSites) + ")");
-  }
-  std::size_t next = 0;
-  long trucks = 0;
-  std::unordered_set<std::string> names;
-  for (std::size_t i = 0; i < sites.size(); ++i) {
-    const std::string P = where + "[" + std::to_string(i) + "].";
-    const nlohmann::json& e = sites[i];
-    fleet::CloudSite s;
-    s.name = get_field<std::string>(e, "name", path, P);
-    s.fingerprint = get_field<std::string>(e, "fingerprint", path, P);
-    s.road_name = get_field<std::string>(e, "road", path, P);
-    s.sensors = get_field<int>(e, "sensors", path, P);
-    s.lateral_min_m = get_field<double>(e, "lateral_min_m", path, P);
-    s.lateral_max_m = get_field<double>(e, "lateral_max_m", path, P);
-    s.trucks_seen = get_field<long>(e, "trucks_seen", path, P);
-    if (s.name.empty()) throw DataError(path, 0, P + "name", "is empty");
-    if (!names.insert(s.name).second) throw DataError(path, 0, P + "name", "'" + s.name + "' names two sites");
-    if (s.sensors < 1 || !(s.lateral_min_m < s.lateral_max_m)) {
-      throw DataError(path, 0, P + "sensors", "impossible site (sensors or lateral range)");
-    }
-    // The sites' trucks add up to the file's: each at most what the others leave (no overflow).
-    if (s.trucks_seen < 0 || c.trucks_seen < trucks || s.trucks_seen > c.trucks_seen - trucks) {
-      throw DataError(path, 0, P + "trucks_seen", "must be from 0 to the file's trucks_seen less the sites before it");
-    }
-    // Two whole numbers, each through get_field's range check (a cast of 1e300 would be undefined).
-    const nlohmann::json& pool_json = e.contains("pool") ? e["pool"] : nlohmann::json();
-    if (!pool_json.is_array() || pool_json.size() != 2) {
-      throw DataError(path, 0, P + "pool", "must be [first, count]: the site's trucks in cloud.speed_mps");
-    }
-    const nlohmann::json pool_object = {{"first", pool_json[0]}, {"count", pool_json[1]}};
-    const std::uint64_t pool[2] = {get_field<std::uint64_t>(pool_object, "first", path, P + "pool."),
-                                   get_field<std::uint64_t>(pool_object, "count", path, P + "pool.")};
-    // A site may have no trucks in one vehicle class's fit (its pool is then empty).
-    if (pool[0] != next || pool[1] > c.speed_mps.size() - next ||
-        (pool[1] == 0) != (s.trucks_seen == 0)) {
-      throw DataError(path, 0, P + "pool",
-                      "must be [first, count]: the site's trucks in cloud.speed_mps, from " + std::to_string(next) +
-                          ", within the " + std::to_string(c.speed_mps.size()) + " there are, none only for a site "
-                          "with no trucks");
-    }
-    s.pool_begin = pool[0];
-    s.pool_count = pool[1];
-    next += s.pool_count;
-    trucks += s.trucks_seen;
-    c.sites.push_back(std::move(s));
-  }
-  if (next != c.speed_mps.size()) {
-    throw DataError(path, 0, where, "the sites' pools hold " + std::to_string(next) + " of the " +
-                                        std::to_string(c.speed_mps.size()) + " trucks in cloud.speed_mps");
-  }
-  if (trucks != c.trucks_seen) {
-    throw DataError(path, 0, where, "the sites' trucks_seen add up to " + std::to_string(trucks) + ", not the file's " +
-                                        std::to_string(c.trucks_seen));
-  }
-}
-
-// The sensor calibration of the sites (posterior_cloud.hpp, SiteCalibration): per site its name, its
-// gains (positive) and, if they were fitted, their standard errors (one per gain, >= 0).
-void parse_calibration(const nlohmann::json& list, const std::string& path, const std::string& where,
-                       fleet::PosteriorCloud& c) {
-  if (!list.is_array() || list.empty()) throw DataError(path, 0, where, "must be a non-empty array of sites' gains");
-  if (list.size() > kMaxPosteriorSites) {
-    throw DataError(path, 0, where, "lists " + std::to_string(list.size()) + " sites, more than this build reads (" +
-                                        std::to_string(kMaxPosteriorSites) + ")");
-  }
-  for (std::size_t i = 0; i < list.size(); ++i) {
-    const std::string P = where + "[" + std::to_string(i) + "].";
-    const nlohmann::json& e = list[i];
-    if (!e.is_object()) throw DataError(path, 0, where + "[" + std::to_string(i) + "]", "must be an object");
-    fleet::SiteCalibration s;
-    s.site = get_field<std::string>(e, "site", path, P);
-    s.gain = finite_numbers(e, "gain", path, P);
-    if (s.gain.empty() || s.gain.size() > static_cast<std::size_t>(site::kMaxSensors)) {
-      throw DataError(path, 0, P + "gain", "must hold one gain per sensor");
-    }
-    for (double g : s.gain) {
-      if (!(g > 0.0)) throw DataError(path, 0, P + "gain", "holds a gain that is not positive");
-    }
-    if (e.contains("se")) {
-      s.se = finite_numbers(e, "se", path, P);
-      if (s.se.size() != s.gain.size()) throw DataError(path, 0, P + "se", "needs one standard error per gain");
-      for (double x : s.se) {
-        if (x < 0.0) throw DataError(path, 0, P + "se", "holds a negative standard error");
-      }
-    }
-    c.calibration.push_back(std::move(s));
-  }
-}
 
 // One posterior object (the whole single-class file, or one entry of "classes"); P prefixes the
 // fields' names in messages ("" or "classes[i].").
@@ -343,8 +210,8 @@ fleet::PosteriorCloud parse_posterior_object(const nlohmann::json& j, const std:
   c.weights /= total;
   if (c.method == "mcmc") c.weight_ess = static_cast<double>(c.weights.size());  // equal weights
   // The model: files written before models existed are the base model's.
-  if (site.contains("sites")) parse_sites(site["sites"], path, P + "site.sites", c);
-  if (j.contains("calibration")) parse_calibration(j["calibration"], path, P + "calibration", c);
+  if (site.contains("sites")) parse_posterior_sites(site["sites"], path, P + "site.sites", c);
+  if (j.contains("calibration")) parse_posterior_calibration(j["calibration"], path, P + "calibration", c);
   c.model = j.contains("model") ? get_field<std::string>(j, "model", path, P) : "base";
   if (c.model.empty()) throw DataError(path, 0, P + "model", "is empty (\"base\" or a model spec)");
   if (c.model != "base" && cloud.contains("psi")) {  // none when the spec fixes every parameter

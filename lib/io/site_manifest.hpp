@@ -1,4 +1,4 @@
-// The site manifest (issue 21): the WIM sites of one road network, each with its road surface,
+// The site manifest: the WIM sites of one road network, each with its road surface,
 // its sensor array and its log, in one JSON file:
 //   {"sites": [{"name": "A12-north", "road": "a12n.crg", "sensors": "76,1.5,16", "log": "a12n.csv"},
 //              ...]}

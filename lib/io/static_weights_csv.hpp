@@ -1,4 +1,4 @@
-// The static-weight CSVs of `ssrfleet weigh` and `ssrfleet simulate` (issue 18 item 2). Formats
+// The static-weight CSVs of `ssrfleet weigh` and `ssrfleet simulate`. Formats
 // only: weigh/ estimates, the simulator knows the truth.
 //  - estimates: header exactly truck_id,static_kn,static_kn_q025,static_kn_q975 (static wheel load
 //    and its 95 % interval, kN);

@@ -1,4 +1,4 @@
-// The model a command fits, predicts with or simulates, as users write it (issue 17):
+// The model a command fits, predicts with or simulates, as users write it:
 // "base", or catalogue effects joined by '+', each in the grammar of simulate --effect,
 // NAME[:param=value,...]: a parameter given is fixed at its value, one left out is fitted.
 //   tyre_damping+sensor_gain:sensor=11     tyre damping fitted, a gain on sensor 11 fitted

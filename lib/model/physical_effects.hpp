@@ -1,4 +1,4 @@
-// What of a fitted model's effects a prediction of the tyre forces keeps (issue 17: predict uses
+// What of a fitted model's effects a prediction of the tyre forces keeps (predict uses
 // the extended posterior; predict and damage use this view, weigh the whole model, since the
 // forces it weighs went through the sensors). The force the road feels:
 //   - the vehicle and the traffic (edit_pass: damping, unsprung mass, the true speed behind a

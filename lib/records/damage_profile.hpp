@@ -1,4 +1,4 @@
-// The damage a fleet does along the road (issue 18 item 1), as `ssrfleet damage` reports it: plain
+// The damage a fleet does along the road, as `ssrfleet damage` reports it: plain
 // data, no format, no model. damage/ computes it; io/damage_csv writes it.
 //
 // Per position x, over the fleet's trucks (P the quarter car's tyre force, P_s its static value,

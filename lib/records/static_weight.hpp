@@ -1,4 +1,4 @@
-// One truck's static wheel load as `ssrfleet weigh` estimates it (issue 18 item 2): plain data, no
+// One truck's static wheel load as `ssrfleet weigh` estimates it: plain data, no
 // format. weigh/ computes it; io/static_weights_csv writes it.
 #pragma once
 

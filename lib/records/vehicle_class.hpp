@@ -1,4 +1,4 @@
-// Vehicle classes (issue 18 item 3): a WIM log may label each truck with a class, FHWA's 13
+// Vehicle classes: a WIM log may label each truck with a class, FHWA's 13
 // ("1".."13") or the user's own. A label is plain data, a token of [A-Za-z0-9_.-]+ (so it is safe
 // in a CSV field, a JSON string and a file name); an unlabelled truck has the empty label.
 #pragma once

@@ -10,6 +10,7 @@
 
 #include "smc/weights.hpp"
 #include "util/errors.hpp"
+#include "util/option_rules.hpp"
 #include "util/stop_token.hpp"
 
 namespace ssrfleet::smc {
@@ -19,15 +20,6 @@ namespace {
 // Purposes of the engine's streams (first key below the root).
 enum StreamPurpose : std::uint64_t { kModel = 1, kResample = 2, kMove = 3, kStandaloneMove = 4 };
 
-// Ceres-style rule checks: each failing rule writes "Options: <rule>" and returns false.
-#define SMC_OPTION_RULE(condition, text)   \
-  do {                                     \
-    if (!(condition)) {                    \
-      if (error) *error = "TemperedSampler::Options: " text; \
-      return false;                        \
-    }                                      \
-  } while (false)
-
 }  // namespace
 
 int TemperedSampler::Options::default_threads() {
@@ -36,31 +28,27 @@ int TemperedSampler::Options::default_threads() {
 }
 
 bool TemperedSampler::Options::IsValid(std::string* error) const {
-  SMC_OPTION_RULE(particles >= 2, "particles must be >= 2");
+  util::OptionRules rules("TemperedSampler::Options", error);
+  rules.require(particles >= 2, "particles", particles, ">= 2");
   // An absurd count fails here, before a cloud of it is allocated (docs/site-data.md).
-  SMC_OPTION_RULE(particles <= kMaxParticles, "particles must be <= 10000000");
-  SMC_OPTION_RULE(threads >= 1, "threads must be >= 1");
-  SMC_OPTION_RULE(ess_rmin >= 0.0 && ess_rmin <= 1.0, "ess_rmin must be in [0, 1]");
-  SMC_OPTION_RULE(tempering.cess_target > 0.0 && tempering.cess_target < 1.0,
-                  "tempering.cess_target must be in (0, 1)");
-  SMC_OPTION_RULE(tempering.tolerance > 0.0 && tempering.tolerance < 1.0,
-                  "tempering.tolerance must be in (0, 1)");
-  SMC_OPTION_RULE(tempering.max_bisections >= 1, "tempering.max_bisections must be >= 1");
-  SMC_OPTION_RULE(tempering.min_step > 0.0 && tempering.min_step < 1.0, "tempering.min_step must be in (0, 1)");
-  SMC_OPTION_RULE(mh.scale > 0.0 && std::isfinite(mh.scale), "mh.scale must be positive");
-  SMC_OPTION_RULE(mh.independence_df > 0.0, "mh.independence_df must be positive");
-  SMC_OPTION_RULE(mh.independence_inflation > 0.0 && std::isfinite(mh.independence_inflation),
-                  "mh.independence_inflation must be positive");
+  rules.require(particles <= kMaxParticles, "particles", particles, "<= 10000000");
+  rules.require(threads >= 1, "threads", threads, ">= 1");
+  rules.require(ess_rmin >= 0.0 && ess_rmin <= 1.0, "ess_rmin", ess_rmin, "in [0, 1]");
+  rules.require(tempering.cess_target > 0.0 && tempering.cess_target < 1.0, "tempering.cess_target",
+                tempering.cess_target, "in (0, 1)");
+  rules.require(tempering.tolerance > 0.0 && tempering.tolerance < 1.0, "tempering.tolerance", tempering.tolerance,
+                "in (0, 1)");
+  rules.require(tempering.max_bisections >= 1, "tempering.max_bisections", tempering.max_bisections, ">= 1");
+  rules.require(tempering.min_step > 0.0 && tempering.min_step < 1.0, "tempering.min_step", tempering.min_step,
+                "in (0, 1)");
+  rules.require(mh.scale > 0.0 && std::isfinite(mh.scale), "mh.scale", mh.scale, "positive");
+  rules.require(mh.independence_df > 0.0, "mh.independence_df", mh.independence_df, "positive");
+  rules.require(mh.independence_inflation > 0.0 && std::isfinite(mh.independence_inflation),
+                "mh.independence_inflation", mh.independence_inflation, "positive");
   std::string schedule_error;
-  if (!schedule.IsValid(&schedule_error)) {
-    if (error) *error = "TemperedSampler::Options: " + schedule_error;
-    return false;
-  }
-  if (error) error->clear();
-  return true;
+  rules.nested(schedule.IsValid(&schedule_error), schedule_error);
+  return rules.passed();
 }
-
-#undef SMC_OPTION_RULE
 
 TemperedSampler::TemperedSampler(Options options)
     : options_(std::move(options)), parallel_(options_.threads >= 1 ? options_.threads : 1), root_(options_.seed) {

@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <sstream>
+#include <string>
+
+#include "util/option_rules.hpp"
 
 namespace ssrfleet::smc {
 
@@ -30,34 +33,24 @@ MoveSchedule MoveSchedule::ibis_independence(int max_sweeps, int final_sweeps) {
   return s;
 }
 
-#define SCHEDULE_RULE(condition, text)                          \
-  do {                                                          \
-    if (!(condition)) {                                         \
-      if (error) *error = std::string("MoveSchedule: ") + text; \
-      return false;                                             \
-    }                                                           \
-  } while (false)
-
 bool MoveSchedule::IsValid(std::string* error) const {
-  SCHEDULE_RULE(!sweep.empty(), "sweep must list at least one move");
-  SCHEDULE_RULE(min_sweeps >= 1, "min_sweeps must be >= 1");
-  SCHEDULE_RULE(max_sweeps >= min_sweeps, "max_sweeps must be >= min_sweeps");
-  SCHEDULE_RULE(jump_target > 0.0 && jump_target <= 1.0, "jump_target must be in (0, 1]");
-  SCHEDULE_RULE(final_sweeps >= 0, "final_sweeps must be >= 0");
+  util::OptionRules rules("MoveSchedule", error);
+  rules.require(!sweep.empty(), "sweep must list at least one move");
+  rules.require(min_sweeps >= 1, "min_sweeps", min_sweeps, ">= 1");
+  rules.require(max_sweeps >= min_sweeps, "max_sweeps", max_sweeps, ">= min_sweeps (" + std::to_string(min_sweeps) + ")");
+  rules.require(jump_target > 0.0 && jump_target <= 1.0, "jump_target", jump_target, "in (0, 1]");
+  rules.require(final_sweeps >= 0, "final_sweeps", final_sweeps, ">= 0");
   for (std::size_t m = 0; m < sweep.size(); ++m) {
     const ScheduledMove& s = sweep[m];
-    const std::string which = "sweep[" + std::to_string(m) + "] (" + to_string(s.kind) + "): ";
-    SCHEDULE_RULE(s.kind != MoveKind::kModel || !s.model_move.empty(), which + "a model move needs its name");
-    SCHEDULE_RULE(s.kind == MoveKind::kModel || s.model_move.empty(), which + "only a model move has a name");
-    SCHEDULE_RULE(s.run_if_previous_acceptance_below > 0.0 && !std::isnan(s.run_if_previous_acceptance_below),
-                  which + "run_if_previous_acceptance_below must be positive");
-    SCHEDULE_RULE(s.max_runs_per_stage >= -1, which + "max_runs_per_stage must be >= -1");
+    const std::string which = "sweep[" + std::to_string(m) + "] (" + to_string(s.kind) + ")";
+    rules.require(s.kind != MoveKind::kModel || !s.model_move.empty(), which + ": a model move needs its name");
+    rules.require(s.kind == MoveKind::kModel || s.model_move.empty(), which + ": only a model move has a name");
+    rules.require(s.run_if_previous_acceptance_below > 0.0 && !std::isnan(s.run_if_previous_acceptance_below),
+                  which + ".run_if_previous_acceptance_below", s.run_if_previous_acceptance_below, "positive");
+    rules.require(s.max_runs_per_stage >= -1, which + ".max_runs_per_stage", s.max_runs_per_stage, ">= -1");
   }
-  if (error) error->clear();
-  return true;
+  return rules.passed();
 }
-
-#undef SCHEDULE_RULE
 
 std::string MoveSchedule::describe() const {
   std::ostringstream os;

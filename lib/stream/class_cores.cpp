@@ -165,7 +165,7 @@ void ClassCores::restore(BinaryReader& in, bool split) {
     c.trucks_generation = in.value<std::int32_t>("trucks_generation");
     if (split != c.fit->splits_state()) {
       in.fail("core", std::string("the state was written by the ") + (split ? "marginal" : "latent") +
-                          " core; resume it with the same core (--window selects the latent one)");
+                          " core; resume it with the model it was written with (the model decides the core)");
     }
     if (!split) {
       c.fit->restore(in);

@@ -1,4 +1,4 @@
-// A stream state's fleet posteriors, one per vehicle class (issue 18 item 3), each an
+// A stream state's fleet posteriors, one per vehicle class, each an
 // independent fleet::OnlineFit seeded from the stream's seed and its label
 // (fleet::class_seed). An unlabelled input is one class with the empty label, whose core is
 // exactly the single core of a state before classes: its seed, its truck log trucks.bin.

@@ -1,4 +1,4 @@
-// One writer per stream state directory (issue 20): an flock(2) on DIR/lock, held for the life of
+// One writer per stream state directory: an flock(2) on DIR/lock, held for the life of
 // the stream. The kernel drops it when its holder exits, however it exits (kill -9 included), so a
 // resume after a crash needs no clean-up, while a second stream started on a live state stops at
 // once (BusyError, exit 75) before it reads or writes anything there.

@@ -1,6 +1,6 @@
 // The Clopper-Pearson interval of a binomial proportion (Clopper & Pearson 1934): the exact
 // central interval, from the beta quantiles, never shorter than its nominal coverage. For the
-// detection and false-alarm rates of `diagnose` (issue 17 item 4) and the site check's.
+// detection and false-alarm rates of `diagnose` and the site check's.
 #pragma once
 
 #include <stdexcept>

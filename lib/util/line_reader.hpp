@@ -1,4 +1,4 @@
-// Reading a text line with a ceiling on its length (issue 20 item 8: absurd inputs fail fast).
+// Reading a text line with a ceiling on its length (absurd inputs fail fast).
 // std::getline reads a line whatever its length, so a 1 GB line (a binary file passed as a log, a
 // log with its newlines stripped) is taken into memory before anything can refuse it, and a
 // larger one ends in an out-of-memory kill. read_bounded_line stops after max_bytes characters

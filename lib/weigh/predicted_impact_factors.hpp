@@ -1,5 +1,5 @@
 // What the fleet posterior predicts for one truck at the sensors, given its speed and sprung mass:
-// the mean impact factor at each sensor and their covariance (issue 18 item 2). The truck's own
+// the mean impact factor at each sensor and their covariance. The truck's own
 // k, k_t and z are unknown: they come from the fleet distribution, θ from the posterior
 // (fleet/predictive_trucks.hpp, the same draws as the SSR prediction, with the traffic fixed to
 // this truck).

@@ -1,4 +1,4 @@
-// The SSR-corrected multiple-sensor static-weight estimator (issue 18 item 2; the use the seed
+// The SSR-corrected multiple-sensor static-weight estimator (the use the seed
 // paper names in its §5: "knowledge of SSR will allow this bias to be removed when estimating
 // vehicle static weight").
 //

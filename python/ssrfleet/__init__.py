@@ -362,13 +362,12 @@ def _mix_text(mix):
 
 _FIT_INTS = {"particles": (2, 10_000_000), "runs": (1, 64), "chains": (1, _INT_MAX), "iterations": (1, _LONG_MAX),
              "burn_in": (0, _LONG_MAX), "thin": (1, _LONG_MAX), "threads": (0, _INT_MAX),
-             "final_sweeps": (0, _INT_MAX), "max_sweeps": (1, _INT_MAX), "older_sweeps": (0, _INT_MAX),
-             "window": (0, _LONG_MAX)}
+             "final_sweeps": (0, _INT_MAX), "max_sweeps": (1, _INT_MAX), "older_sweeps": (0, _INT_MAX)}
 
 
 def fit(log=None, site=None, method="smc", model="base", seed=1, particles=None, runs=None, chains=None,
         iterations=None, burn_in=None, thin=None, threads=0, core=None, final_sweeps=None, cess=None,
-        max_sweeps=None, older_sweeps=None, window=None, fhwa_classes=False, progress=False, checkpoint=None,
+        max_sweeps=None, older_sweeps=None, fhwa_classes=False, progress=False, checkpoint=None,
         checkpoint_every_s=None, checkpoint_every_trucks=None, sites=None):
     """Fit a WIM log, as `ssrfleet fit` (the same posterior, to the byte, for the same seed).
 
@@ -386,7 +385,7 @@ def fit(log=None, site=None, method="smc", model="base", seed=1, particles=None,
     options = {"model": _text("model", model), "fhwa_classes": bool(fhwa_classes), "progress": bool(progress)}
     given = {"particles": particles, "runs": runs, "chains": chains, "iterations": iterations, "burn_in": burn_in,
              "thin": thin, "threads": threads, "final_sweeps": final_sweeps, "max_sweeps": max_sweeps,
-             "older_sweeps": older_sweeps, "window": window}
+             "older_sweeps": older_sweeps}
     for key, value in given.items():
         if value is not None:
             low, high = _FIT_INTS[key]
@@ -533,17 +532,16 @@ class Stream:
 
     One writer per state: a state another process (or another Stream) holds raises BusyError, with
     the attributes state_dir and pid. close() (or leaving a `with` block) releases it. The options
-    are the command's (--model, --seed, --particles, --threads, --window, --classes, --fhwa-classes,
+    are the command's (--model, --seed, --particles, --threads, --classes, --fhwa-classes,
     --tables-in-memory); a resume must give the seed and model the state was made with.
     """
 
-    def __init__(self, state_dir, site=None, model="base", seed=1, particles=1024, threads=0, window=0,
-                 classes=None, fhwa_classes=False, tables_in_memory=False, progress=False):
+    def __init__(self, state_dir, site=None, model="base", seed=1, particles=1024, threads=0, classes=None, fhwa_classes=False, tables_in_memory=False, progress=False):
         self._site = _site(site)
         self.state_dir = _text("state_dir", state_dir)
         options = {"model": _text("model", model), "particles": _integer("particles", particles, 2, 10_000_000),
                    "threads": _integer("threads", threads, 0, _INT_MAX),
-                   "window": _integer("window", window, 0, _LONG_MAX), "fhwa_classes": bool(fhwa_classes),
+                   "fhwa_classes": bool(fhwa_classes),
                    "tables_in_memory": bool(tables_in_memory), "progress": bool(progress)}
         if classes is not None:
             if isinstance(classes, str):

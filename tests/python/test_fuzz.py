@@ -115,7 +115,7 @@ def test_fit_survives_random_logs_and_options(base_log):
         options = {"particles": 8, "final_sweeps": 0}
         if rng.random() < 0.3:
             options[str(rng.choice(["particles", "seed", "method", "model", "threads", "runs", "chains", "cess",
-                                    "core", "window"]))] = random_value(rng)
+                                    "core", "older_sweeps"]))] = random_value(rng)
         if rng.random() < 0.3:
             options["particles"] = 8
         if rng.random() < 0.1:
