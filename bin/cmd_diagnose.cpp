@@ -47,17 +47,18 @@ int run_diagnose(int argc, const char* const argv[]) {
        "worker threads; 0 = all cores (results do not depend on it)")
       ("seed", po::value(&seed_text)->value_name("SEED")->default_value(seed_text), "random seed (a whole number)")
       ("alpha", po::value(&o.alpha)->value_name("X")->default_value(o.alpha),
-       ("a check is flagged when its predictive p-value is below alpha; the verdict that a misfit remains (and the "
-        "search for a further effect) needs a check below alpha / " + std::to_string(kCheckFamilies) +
+       ("a check is flagged when its predictive p-value is below alpha; the verdict that a misfit remains needs a "
+        "check below alpha / " + std::to_string(kCheckFamilies) +
         ", one share for each of the " + std::to_string(kCheckFamilies) + " check families (Bonferroni)").c_str())
       ("min-log-bf", po::value(&o.min_log_bayes_factor)->value_name("X")->default_value(o.min_log_bayes_factor),
-       "log Bayes factor an effect needs against the base model")
+       "log Bayes factor an effect needs against the model before it (the base model, or the effects named so far)")
       ("holdout", po::value(&o.holdout_fraction)->value_name("X")->default_value(o.holdout_fraction),
        "share of the trucks (the last ones) that score held-out skill")
       ("candidates", po::value(&candidates)->value_name("LIST"),
        ("effects to consider, comma-separated (default: all of them: " + catalogue + "; ssrfleet effects describes them)").c_str())
       ("max-effects", po::value(&o.max_effects)->value_name("N")->default_value(o.max_effects),
-       "effects added at most: after each, diagnose checks again and looks for the next while a check fails")
+       "effects added at most: after each, diagnose checks again and weighs every remaining effect on top of it by "
+       "evidence and held-out skill, whether or not a check still fails")
       ("shortlist-only", po::bool_switch(&o.shortlist_only),
        "refit only candidates that a failed check points at (faster; misses effects the checks cannot see)")
       ("refit-from-prior", po::bool_switch(&refit_from_prior),

@@ -301,20 +301,26 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
   }
 
   // Effect by effect: each round refits the current model plus each remaining candidate, adds the
-  // one the evidence and held-out skill support, and checks again; later rounds run only while a
-  // check still fails (a gap remains).
+  // one the evidence and held-out skill support, and checks again. The search goes on after the
+  // checks pass: a second effect can hide behind the first (a sensor gain's fit absorbs the
+  // gap a tyre damping leaves, so the checks pass while the evidence for the damping on top of the
+  // gain is still strong), and only the evidence and held-out skill of each remaining effect on top
+  // of the chosen model can tell. It ends when no candidate is supported, or at max_effects.
   std::string spec;  // the current model's effects ("" = base)
   Fitted extended;   // the model with the effects named so far (online null: the base model)
   const auto current_fit = [&]() -> const Fitted& { return extended.online ? extended : base; };
   CheckReport current_checks = r.checks_before;
   for (int round = 0; round < o.max_effects; ++round) {
-    if (round > 0 && !gap_remains(current_checks, o.alpha)) break;
     std::vector<std::string> remaining;
     for (const auto& name : names) {
       if (std::find(r.effects.begin(), r.effects.end(), name) == r.effects.end()) remaining.push_back(name);
     }
     if (remaining.empty()) break;
-    if (round > 0) say("a gap remains with " + spec + ": looking for another effect");
+    if (round > 0) {
+      say(gap_remains(current_checks, o.alpha) ? "a gap remains with " + spec + ": looking for another effect"
+                                               : "the checks pass with " + spec +
+                                                     ": weighing each remaining effect on top of it");
+    }
     const auto round_start = Clock::now();
     Round next = next_effect(site, records, heldout_from, current_fit(), spec, remaining, current_checks, proposals, o, say);
     if (round == 0) {

@@ -4,8 +4,9 @@
 // base model) confirmed by held-out predictive skill, and measure the gap again with the chosen
 // effect in the model. Among the supported candidates, those within the threshold of the largest
 // log Bayes factor are not told apart by evidence, and the best held-out skill among them is chosen.
-// While a check still fails, the search goes on from the model so far (a composed model,
-// model_spec.hpp), one effect a round, up to max_effects. The verdict: "none" (no check fails, no
+// The search goes on from the model so far (a composed model, model_spec.hpp), one effect a round,
+// while the evidence and held-out skill support another effect on top of it (whether or not a
+// check still fails: a first effect can hide a second from the checks), up to max_effects. The verdict: "none" (no check fails, no
 // effect supported), "explained" (effects named, no check fails with them) or "unexplained" (a
 // check still fails, with the failed checks and where they point in the description).
 //
