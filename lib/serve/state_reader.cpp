@@ -197,7 +197,12 @@ std::vector<HistorySeries> StateReader::history(const HistoryQuery& q) {
     if (!s.next()) return out;
     last_trucks = s.integer(0);
   }
-  const std::int64_t from = std::max<std::int64_t>(1, q.from_trucks);
+  std::int64_t first_trucks = 1;  // a state resumed from an older one may start past 1
+  {
+    Statement s(db_, "SELECT trucks FROM reports ORDER BY seq ASC LIMIT 1;", path_);
+    if (s.next()) first_trucks = s.integer(0);
+  }
+  const std::int64_t from = std::max<std::int64_t>(first_trucks, q.from_trucks);
   const std::int64_t to = q.to_trucks > 0 ? std::min(q.to_trucks, last_trucks) : last_trucks;
   if (to < from) return out;
   const std::int64_t span = to - from + 1;
