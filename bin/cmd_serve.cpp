@@ -89,8 +89,12 @@ int run_serve(int argc, const char* const argv[]) {
   if (!(options.idle_after_s > 0.0)) throw UsageError("--idle-after must be > 0");
   options.burst = std::max(1.0, 2.0 * options.rate_per_s);
   for (const auto& dir : dirs) {
-    if (!std::filesystem::is_directory(dir)) {
-      throw MissingInputError("--state '" + dir + "' is not a directory (start the stream first, or check the path)");
+    // A state that is not there yet is waited for (serve may start before its stream); a file is a mistake.
+    if (std::filesystem::exists(dir) && !std::filesystem::is_directory(dir)) {
+      throw UsageError("--state '" + dir + "' is not a directory");
+    }
+    if (!std::filesystem::exists(dir)) {
+      std::cerr << "ssrfleet serve: '" << dir << "' does not exist yet: shown as waiting until a stream makes it\n";
     }
   }
   ManifestSites sites;

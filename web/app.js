@@ -216,7 +216,11 @@ async function tick() {
     $("ess").textContent = Math.round(cp.ess).toString();
     $("age").textContent = cp.age_s < 90 ? Math.round(cp.age_s) + " s ago" : new Date(cp.time_s * 1000).toLocaleString();
     $("model").textContent = body.model;
-    if (cp.seq !== view.seq) { view.seq = cp.seq; await onCheckpoint(); }
+    if (cp.seq !== view.seq) {
+      noteCheckpoint(cp);
+      view.seq = cp.seq;
+      await onCheckpoint();
+    }
     if ((cp.seq !== view.damageSeq || view.damageWanted) && Date.now() - view.damageAt >= DAMAGE_EVERY_MS) {
       await refreshDamage();
     }
@@ -225,6 +229,17 @@ async function tick() {
   } finally {
     setTimeout(tick, POLL_MS);
   }
+}
+
+// What the browser test reads: the trucks at the first checkpoint this page saw, how many new
+// checkpoints it showed since without a reload, and the longest delay from a checkpoint's report
+// being written to the page showing it.
+function noteCheckpoint(cp) {
+  const d = document.body.dataset;
+  if (d.firstTrucks === undefined) { d.firstTrucks = String(cp.trucks); d.updates = "0"; d.maxLagMs = "0"; return; }
+  if (view.seq === -1) return;  // a selection changed: the same checkpoint drawn again
+  d.updates = String(Number(d.updates) + 1);
+  d.maxLagMs = String(Math.max(Number(d.maxLagMs), Math.round(Date.now() - cp.time_s * 1000)));
 }
 
 function reset() { view.seq = -1; view.damageSeq = -1; view.damageAt = 0; }
