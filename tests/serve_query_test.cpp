@@ -39,6 +39,8 @@ TEST_CASE("serve query: every refusal names the parameter", "[serve]") {
   CHECK(refused_parameter([] { Query::parse("positions=%4"); }) == "positions");
   CHECK(refused_parameter([] { Query::parse("positions=%zz1"); }) == "positions");
   CHECK(refused_parameter([] { Query::parse("state=a%00b"); }) == "state");
+  CHECK(refused_parameter([] { Query::parse(std::string("limit=1\0(", 9)); }) == "limit");
+  CHECK(refused_parameter([] { Query::parse("state=a%0Ab"); }) == "state");
   CHECK(refused_parameter([] { Query::parse("Bad=1"); }) == "Bad");
   CHECK(refused_parameter([] { Query::parse("=1"); }) == "query");
   CHECK(refused_parameter([] { Query::parse(std::string(kMaxQueryBytes + 1, 'a')); }) == "query");

@@ -8,6 +8,8 @@ namespace ssrfleet::serve {
 
 namespace {
 
+bool is_control(char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; }
+
 int hex_digit(char c) {
   if (c >= '0' && c <= '9') return c - '0';
   if (c >= 'a' && c <= 'f') return c - 'a' + 10;
@@ -15,8 +17,9 @@ int hex_digit(char c) {
   return -1;
 }
 
-// Percent-decoding; '+' is a space (HTML forms). A '%' not followed by two hex digits, or a decoded
-// NUL, is refused: neither has a use in this API and both are classic ways to smuggle bytes.
+// Percent-decoding; '+' is a space (HTML forms). A '%' not followed by two hex digits, or a control
+// character (NUL included), sent as it is or encoded, is refused: none has a use in this API, and
+// they are the classic ways to smuggle bytes into logs and messages.
 std::string decode(std::string_view text, const std::string& parameter) {
   std::string out;
   out.reserve(text.size());
@@ -28,9 +31,11 @@ std::string decode(std::string_view text, const std::string& parameter) {
       const int lo = two_follow ? hex_digit(text[i + 2]) : -1;
       if (hi < 0 || lo < 0) throw QueryError(parameter, "a '%' must be followed by two hexadecimal digits");
       const char decoded = static_cast<char>(hi * 16 + lo);
-      if (decoded == '\0') throw QueryError(parameter, "an encoded NUL byte (%00) is not allowed");
+      if (is_control(decoded)) throw QueryError(parameter, "control characters (such as %00) are not allowed");
       out.push_back(decoded);
       i += 2;
+    } else if (is_control(c)) {
+      throw QueryError(parameter, "control characters are not allowed");
     } else if (c == '+') {
       out.push_back(' ');
     } else {

@@ -5,7 +5,7 @@
 //
 // Limits (docs/serve.md): a query of at most kMaxQueryBytes bytes, at most kMaxParameters
 // parameters, each named by 1 to 32 of [a-z_], each at most once, values percent-decoded to at
-// most kMaxValueBytes bytes; positions at most kMaxPositions, finite and strictly increasing.
+// most kMaxValueBytes bytes with no control character; positions at most kMaxPositions, finite and strictly increasing.
 #pragma once
 
 #include <cstddef>
