@@ -32,7 +32,9 @@ struct StreamedState {
   std::string state;
   StreamedState() {
     state = dir.file("site_state");
-    REQUIRE(test::run_ssrfleet("simulate --road AS1 --trucks 30 --seed 7 --out '" + dir.file("log.csv") + "'", dir).status == 0);
+    REQUIRE(test::run_ssrfleet("simulate --road AS1 --trucks 30 --seed 7 --out '" + dir.file("log.csv") + "'",
+                               dir)
+                .status == 0);
     std::string log = test::read_text(dir.file("log.csv"));
     // A speed out of range and a repeated truck id: two records for the quarantine.
     std::istringstream lines(log);
@@ -50,8 +52,8 @@ struct StreamedState {
     const std::string fast = "BAD1,95" + first.substr(c2);
     log += fast + "\n" + first + "\n";
     test::write_text(dir.file("log.csv"), log);
-    const auto run = test::run_ssrfleet("stream --state '" + state + "' --input '" + dir.file("log.csv") +
-                                            "' --particles 128 --quiet", dir);
+    const auto run = test::run_ssrfleet(
+        "stream --state '" + state + "' --input '" + dir.file("log.csv") + "' --particles 128 --quiet", dir);
     REQUIRE(run.status == 0);
   }
 };
@@ -152,7 +154,8 @@ TEST_CASE("serve API: summary, SSR, history and rejects of one checkpoint, with 
   CHECK(trucks.size() >= 9);
   CHECK(trucks.front() == 1);
   CHECK(trucks.back() == 30);  // the checkpoint's own value is always drawn
-  CHECK(hj["series"][0]["mean"].back().get<double>() == Approx(j["hyperparameters"][6]["mean"].get<double>()));
+  CHECK(hj["series"][0]["mean"].back().get<double>() ==
+        Approx(j["hyperparameters"][6]["mean"].get<double>()));
   CHECK(http_get(s.port, "/api/history").json()["series"].size() == 7);
   const auto range = http_get(s.port, "/api/history?from=10&to=12").json();
   CHECK(range["series"][0]["trucks"] == nlohmann::json({10, 11, 12}));
@@ -216,7 +219,8 @@ TEST_CASE("serve API: every error gets its status and a JSON body naming what to
   for (const std::string target :
        {"/api/nope", "/api", "/api/summary/", "/index.html", "/web/app.js", "/../CMakeLists.txt",
         "/%2e%2e/%2e%2e/etc/passwd", "/app.js/../../../etc/passwd", "//etc/passwd", "/..%2f..%2fetc%2fpasswd",
-        "/static/../../history.sqlite", "/history.sqlite", "/site_state/history.sqlite", "/%00", "/chart.min.js%00"}) {
+        "/static/../../history.sqlite", "/history.sqlite", "/site_state/history.sqlite", "/%00",
+        "/chart.min.js%00"}) {
     INFO(target);
     const auto r = http_get(s.port, target);
     CHECK(r.status == 404);
@@ -228,7 +232,8 @@ TEST_CASE("serve API: every error gets its status and a JSON body naming what to
   // Only GET and HEAD.
   for (const std::string method : {"POST", "PUT", "DELETE", "PATCH", "OPTIONS"}) {
     INFO(method);
-    const auto r = http_raw(s.port, method + " /api/summary HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n");
+    const auto r =
+        http_raw(s.port, method + " /api/summary HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n");
     CHECK(r.status == 405);
     CHECK(r.header("allow") == "GET, HEAD");
     CHECK(r.json()["parameter"] == "method");
@@ -241,10 +246,12 @@ TEST_CASE("serve API: every error gets its status and a JSON body naming what to
   CHECK(http_get(s.port, "/nope", "HEAD").status == 404);
 
   // A request body, and a request line past 8 KiB.
-  const auto with_body = http_raw(s.port, "GET /api/summary HTTP/1.1\r\nHost: x\r\nContent-Length: 5\r\n\r\nhello");
+  const auto with_body =
+      http_raw(s.port, "GET /api/summary HTTP/1.1\r\nHost: x\r\nContent-Length: 5\r\n\r\nhello");
   CHECK(with_body.status == 413);
-  const auto huge_body = http_raw(s.port, "POST /api/summary HTTP/1.1\r\nHost: x\r\nContent-Length: 100000\r\n\r\n" +
-                                              std::string(100000, 'x'));
+  const auto huge_body =
+      http_raw(s.port, "POST /api/summary HTTP/1.1\r\nHost: x\r\nContent-Length: 100000\r\n\r\n" +
+                           std::string(100000, 'x'));
   CHECK((huge_body.status == 405 || huge_body.status == 413));
   const auto long_uri = http_get(s.port, "/api/ssr?positions=" + std::string(9000, '1'));
   CHECK(long_uri.status == 414);
@@ -280,7 +287,8 @@ TEST_CASE("serve API: SSR at typed positions and the damage equal predict's and 
   CHECK(j["current"] == true);
   CHECK(j["checkpoint"]["seq"] == 30);
   test::TempDir out;
-  const auto predict = test::run_ssrfleet("predict --posterior '" + streamed().state + "' --positions 90:0.5:92", out);
+  const auto predict =
+      test::run_ssrfleet("predict --posterior '" + streamed().state + "' --positions 90:0.5:92", out);
   REQUIRE(predict.status == 0);
   const auto rows = csv_numbers(predict.out);
   REQUIRE(rows.size() == 5);
@@ -299,8 +307,8 @@ TEST_CASE("serve API: SSR at typed positions and the damage equal predict's and 
   const auto d = computed(s.port, "/api/damage");
   REQUIRE(d.status == 200);
   const auto dj = d.json();
-  const auto damage = test::run_ssrfleet("damage --posterior '" + streamed().state + "' --out '" +
-                                             out.file("damage.csv") + "'", out);
+  const auto damage = test::run_ssrfleet(
+      "damage --posterior '" + streamed().state + "' --out '" + out.file("damage.csv") + "'", out);
   REQUIRE(damage.status == 0);
   const auto drows = csv_numbers(test::read_text(out.file("damage.csv")));
   REQUIRE(drows.size() == 16);
@@ -333,7 +341,8 @@ TEST_CASE("serve: opens nothing of the state but the files it reads, and changes
       const auto* e = reinterpret_cast<const inotify_event*>(p);
       const std::string name = e->len > 0 ? e->name : "";
       if (e->mask & IN_OPEN) opened.insert(name);
-      if (e->mask & (IN_MODIFY | IN_ATTRIB | IN_CREATE | IN_DELETE | IN_MOVED_FROM | IN_MOVED_TO | IN_CLOSE_WRITE)) {
+      if (e->mask &
+          (IN_MODIFY | IN_ATTRIB | IN_CREATE | IN_DELETE | IN_MOVED_FROM | IN_MOVED_TO | IN_CLOSE_WRITE)) {
         changed.insert(name);
       }
       p += sizeof(inotify_event) + e->len;

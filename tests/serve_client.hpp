@@ -26,7 +26,8 @@ struct HttpReply {
   }
 };
 
-inline HttpReply http_raw(int port, const std::string& request, const std::string& source_address = "127.0.0.1") {
+inline HttpReply http_raw(int port, const std::string& request,
+                          const std::string& source_address = "127.0.0.1") {
   HttpReply reply;
   const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
   if (fd < 0) return reply;
@@ -50,7 +51,8 @@ inline HttpReply http_raw(int port, const std::string& request, const std::strin
   }
   std::string raw;
   char buffer[65536];
-  for (ssize_t n; (n = ::recv(fd, buffer, sizeof buffer, 0)) > 0;) raw.append(buffer, static_cast<std::size_t>(n));
+  for (ssize_t n; (n = ::recv(fd, buffer, sizeof buffer, 0)) > 0;)
+    raw.append(buffer, static_cast<std::size_t>(n));
   ::close(fd);
   const std::size_t head_end = raw.find("\r\n\r\n");
   if (raw.rfind("HTTP/1.1 ", 0) != 0 || head_end == std::string::npos) return reply;

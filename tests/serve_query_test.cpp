@@ -46,7 +46,8 @@ TEST_CASE("serve query: every refusal names the parameter", "[serve]") {
   CHECK(refused_parameter([] { Query::parse(std::string(kMaxQueryBytes + 1, 'a')); }) == "query");
   CHECK(refused_parameter([] { Query::parse("v=" + std::string(kMaxValueBytes + 1, 'x')); }) == "v");
   std::string many;
-  for (int i = 0; i < 17; ++i) many += std::string(many.empty() ? "" : "&") + "p" + std::string(i + 1, 'a') + "=1";
+  for (int i = 0; i < 17; ++i)
+    many += std::string(many.empty() ? "" : "&") + "p" + std::string(i + 1, 'a') + "=1";
   // 16 parameters are fine, the 17th is named.
   CHECK(refused_parameter([&] { Query::parse(many); }) == "p" + std::string(17, 'a'));
   const Query q = Query::parse("state=s&limit=x&from=-3&cls=A%3BB&bogus=1");
@@ -121,8 +122,8 @@ TEST_CASE("serve rate limit: a burst, then the refill rate, per client", "[serve
   RateLimiter limit(20.0, 40.0);
   for (int i = 0; i < 40; ++i) REQUIRE(limit.take("a", 100.0) == 0.0);
   const double wait = limit.take("a", 100.0);
-  CHECK(wait == Approx(0.05));  // one token at 20 a second
-  CHECK(limit.take("b", 100.0) == 0.0);  // another client has its own bucket
+  CHECK(wait == Approx(0.05));            // one token at 20 a second
+  CHECK(limit.take("b", 100.0) == 0.0);   // another client has its own bucket
   CHECK(limit.take("a", 100.06) == 0.0);  // 1.2 tokens back
   // A page polling every second with up to 6 requests a second never waits.
   RateLimiter page(20.0, 40.0);

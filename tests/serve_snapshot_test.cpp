@@ -1,8 +1,8 @@
 // The snapshot reader under a writer: every snapshot is one whole checkpoint (its rows verified
 // against their checksum), the history is thinned to the points asked for, a checkpoint is found
 // by its truck count, and the lock holder is found through /proc/locks without opening the lock.
-#include <sys/file.h>
 #include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -103,7 +103,8 @@ TEST_CASE("serve snapshot: a report changed after it was written is refused by n
     io::HistoryDb db(path, "base");
     db.append(report(1));
   }
-  REQUIRE(std::system(("sqlite3 '" + path + "' \"UPDATE predictions SET mean_if = 2 WHERE position_m = 76;\"").c_str()) == 0);
+  REQUIRE(std::system(("sqlite3 '" + path + "' \"UPDATE predictions SET mean_if = 2 WHERE position_m = 76;\"")
+                          .c_str()) == 0);
   serve::StateReader reader(path);
   const auto error = test::data_error([&] { reader.snapshot(); });
   REQUIRE(error);
@@ -132,8 +133,10 @@ TEST_CASE("serve rejects: counted incrementally, and again when a resume cuts th
   serve::RejectsTail tail(path);
   tail.refresh();
   CHECK(tail.total() == 0);
-  std::string text = "# records rejected by ssrfleet stream, verbatim, each after its reason\ntruck_id,speed_mps\n";
-  for (int i = 0; i < 3000; ++i) text += "# line " + std::to_string(i + 3) + ": speed_mps: bad\nT" + std::to_string(i) + ",99\n";
+  std::string text =
+      "# records rejected by ssrfleet stream, verbatim, each after its reason\ntruck_id,speed_mps\n";
+  for (int i = 0; i < 3000; ++i)
+    text += "# line " + std::to_string(i + 3) + ": speed_mps: bad\nT" + std::to_string(i) + ",99\n";
   test::write_text(path, text);
   tail.refresh();
   CHECK(tail.total() == 3000);
@@ -141,7 +144,8 @@ TEST_CASE("serve rejects: counted incrementally, and again when a resume cuts th
   REQUIRE(last.size() == 5);
   CHECK(last.back().line == 3002);
   CHECK(last.back().record == "T2999,99");
-  std::ofstream(path, std::ios::app) << "# line 9999: truck_id: duplicate\nT1,1\n# line 10000: spe";  // half a line
+  std::ofstream(path, std::ios::app)
+      << "# line 9999: truck_id: duplicate\nT1,1\n# line 10000: spe";  // half a line
   tail.refresh();
   CHECK(tail.total() == 3001);
   CHECK(tail.last(1)[0].line == 9999);

@@ -25,7 +25,8 @@ std::shared_ptr<const Snapshot> need_snapshot(ServedState& state, ApiResponse& o
   auto snap = state.view().snapshot;
   if (!snap) {
     out.status = 503;
-    out.body = {{"error", "the state '" + state.config().name + "' has no checkpoint yet"}, {"parameter", "state"}};
+    out.body = {{"error", "the state '" + state.config().name + "' has no checkpoint yet"},
+                {"parameter", "state"}};
   }
   return snap;
 }
@@ -89,7 +90,8 @@ ApiResponse from_lookup(const Computations::Lookup& look, const Snapshot& snap) 
   }
   if (look.refused) {
     out.status = 503;
-    out.body = {{"error", "the computation queue is full: ask again in a few seconds"}, {"parameter", nullptr}};
+    out.body = {{"error", "the computation queue is full: ask again in a few seconds"},
+                {"parameter", nullptr}};
     return out;
   }
   out.status = 202;
@@ -98,8 +100,8 @@ ApiResponse from_lookup(const Computations::Lookup& look, const Snapshot& snap) 
 }
 
 json ssr_json(const predict::SsrPrediction& p) {
-  json j = {{"position_m", p.position_m}, {"mean_if", json::array()}, {"lower95", json::array()},
-            {"upper95", json::array()}, {"mean_lower95", json::array()}, {"mean_upper95", json::array()}};
+  json j = {{"position_m", p.position_m}, {"mean_if", json::array()},      {"lower95", json::array()},
+            {"upper95", json::array()},   {"mean_lower95", json::array()}, {"mean_upper95", json::array()}};
   for (Eigen::Index i = 0; i < p.mean_if.size(); ++i) {
     j["mean_if"].push_back(number(p.mean_if[i]));
     j["lower95"].push_back(number(p.lower95[i]));
@@ -110,7 +112,8 @@ json ssr_json(const predict::SsrPrediction& p) {
   return j;
 }
 
-const json kSsrUnits = {{"position_m", "m"}, {"mean_if", "1 (impact factor)"}, {"lower95", "1"}, {"upper95", "1"},
+const json kSsrUnits = {{"position_m", "m"},   {"mean_if", "1 (impact factor)"},
+                        {"lower95", "1"},      {"upper95", "1"},
                         {"mean_lower95", "1"}, {"mean_upper95", "1"}};
 
 }  // namespace
@@ -155,18 +158,23 @@ ApiResponse api_summary(ServedState& state, const Query& q, double now_s, double
   }
   const Snapshot& s = *v.snapshot;
   const records::HistoryReport& r = s.report;
-  b["checkpoint"] = {{"seq", r.seq},   {"trucks", r.trucks}, {"time_s", r.time_s}, {"age_s", age_s},
-                     {"source", r.source}, {"lines_consumed", r.lines_consumed}, {"ess", number(r.ess)}};
+  b["checkpoint"] = {{"seq", r.seq},        {"trucks", r.trucks}, {"time_s", r.time_s},
+                     {"age_s", age_s},      {"source", r.source}, {"lines_consumed", r.lines_consumed},
+                     {"ess", number(r.ess)}};
   // Over the last minute up to now, not up to the last checkpoint: a stream that stalls shows it.
   const double span_s = std::max(now_s, r.time_s) - s.window_time_s;
-  b["trucks_per_min"] = age_s > 60.0 || span_s < 1.0 ? 0.0
-                                                     : static_cast<double>(r.trucks - s.window_trucks) / span_s * 60.0;
+  b["trucks_per_min"] =
+      age_s > 60.0 || span_s < 1.0 ? 0.0 : static_cast<double>(r.trucks - s.window_trucks) / span_s * 60.0;
   b["model"] = s.model;
   b["classes"] = s.classes;
   json hyper = json::array();
   for (const auto& h : r.hyperparameters) {
-    hyper.push_back({{"class", h.vehicle_class}, {"name", h.name}, {"unit", hyperparameter_unit(h.name)},
-                     {"mean", number(h.mean)}, {"sd", number(h.sd)}, {"q025", number(h.q025)},
+    hyper.push_back({{"class", h.vehicle_class},
+                     {"name", h.name},
+                     {"unit", hyperparameter_unit(h.name)},
+                     {"mean", number(h.mean)},
+                     {"sd", number(h.sd)},
+                     {"q025", number(h.q025)},
                      {"q975", number(h.q975)}});
   }
   b["hyperparameters"] = hyper;
@@ -198,10 +206,16 @@ ApiResponse api_history(ServedState& state, const Query& q) {
       lo.push_back(number(s.q025[i]));
       hi.push_back(number(s.q975[i]));
     }
-    series.push_back({{"name", s.name}, {"unit", hyperparameter_unit(s.name)}, {"trucks", s.trucks},
-                      {"mean", means}, {"q025", lo}, {"q975", hi}});
+    series.push_back({{"name", s.name},
+                      {"unit", hyperparameter_unit(s.name)},
+                      {"trucks", s.trucks},
+                      {"mean", means},
+                      {"q025", lo},
+                      {"q975", hi}});
   }
-  out.body = {{"checkpoint", checkpoint_json(snap->report)}, {"class", h.vehicle_class}, {"series", series},
+  out.body = {{"checkpoint", checkpoint_json(snap->report)},
+              {"class", h.vehicle_class},
+              {"series", series},
               {"units", {{"trucks", "trucks absorbed"}, {"mean", "the parameter's unit"}}}};
   return out;
 }
@@ -229,8 +243,9 @@ ApiResponse api_ssr(ServedState& state, std::size_t state_index, const Query& q,
   const std::string site_name = state.config().sites[site].name;
   if (positions.empty() && q.label("class") == std::nullopt && site == 0) {
     // The history's own prediction at the sensors: no computation at all.
-    json j = {{"position_m", json::array()}, {"mean_if", json::array()}, {"lower95", json::array()},
-              {"upper95", json::array()}, {"mean_lower95", json::array()}, {"mean_upper95", json::array()}};
+    json j = {{"position_m", json::array()},   {"mean_if", json::array()},
+              {"lower95", json::array()},      {"upper95", json::array()},
+              {"mean_lower95", json::array()}, {"mean_upper95", json::array()}};
     for (const auto& p : snap->report.predictions) {
       j["position_m"].push_back(p.position_m);
       j["mean_if"].push_back(number(p.mean_if));
@@ -239,9 +254,10 @@ ApiResponse api_ssr(ServedState& state, std::size_t state_index, const Query& q,
       j["mean_lower95"].push_back(number(p.mean_lower95));
       j["mean_upper95"].push_back(number(p.mean_upper95));
     }
-    out.body = {{"ssr", j}, {"source", "history"}, {"site", site_name}, {"class", cls}, {"units", kSsrUnits},
-                {"checkpoint", checkpoint_json(snap->report)}, {"current", true},
-                {"prediction", {{"theta_draws", 50}, {"trucks_per_draw", 40}}}};
+    out.body = {{"ssr", j},           {"source", "history"},
+                {"site", site_name},  {"class", cls},
+                {"units", kSsrUnits}, {"checkpoint", checkpoint_json(snap->report)},
+                {"current", true},    {"prediction", {{"theta_draws", 50}, {"trucks_per_draw", 40}}}};
     return out;
   }
   std::ostringstream key;
@@ -249,26 +265,33 @@ ApiResponse api_ssr(ServedState& state, std::size_t state_index, const Query& q,
   key << state_index << "|ssr|" << cls << "|" << site << "|";
   for (const double p : positions) key << p << ",";
   ServedState* st = &state;
-  auto job = [st, site, cls, positions, site_name](const std::shared_ptr<const ComputeResult>& have)
-      -> std::shared_ptr<const ComputeResult> {
+  auto job = [st, site, cls, positions, site_name](
+                 const std::shared_ptr<const ComputeResult>& have) -> std::shared_ptr<const ComputeResult> {
     PosteriorAt p = read_posterior_at(*st, site, cls);
     if (have && have->seq == p.seq && p.seq != 0) return nullptr;  // this checkpoint is done already
     const site::Site& where = *st->config().sites[site].site;
     const predict::PredictionOptions options;  // predict's defaults: the same numbers as ssrfleet predict
-    const predict::SsrPrediction prediction = predict::predict_ssr_mixture(p.classes, p.shares, where, positions, options);
+    const predict::SsrPrediction prediction =
+        predict::predict_ssr_mixture(p.classes, p.shares, where, positions, options);
     auto r = std::make_shared<ComputeResult>();
     r->seq = p.seq;
     r->trucks = p.trucks;
-    r->body = {{"ssr", ssr_json(prediction)}, {"source", "posterior"}, {"site", site_name}, {"class", cls},
+    r->body = {{"ssr", ssr_json(prediction)},
+               {"source", "posterior"},
+               {"site", site_name},
+               {"class", cls},
                {"units", kSsrUnits},
-               {"prediction", {{"theta_draws", options.theta_draws}, {"trucks_per_draw", options.trucks_per_draw},
-                               {"seed", options.seed}}}};
+               {"prediction",
+                {{"theta_draws", options.theta_draws},
+                 {"trucks_per_draw", options.trucks_per_draw},
+                 {"seed", options.seed}}}};
     return r;
   };
   return from_lookup(computations.request(key.str(), snap->report.seq, job), *snap);
 }
 
-ApiResponse api_damage(ServedState& state, std::size_t state_index, const Query& q, Computations& computations) {
+ApiResponse api_damage(ServedState& state, std::size_t state_index, const Query& q,
+                       Computations& computations) {
   q.only({"state", "positions", "class", "site"});
   ApiResponse out;
   const auto snap = need_snapshot(state, out);
@@ -282,13 +305,14 @@ ApiResponse api_damage(ServedState& state, std::size_t state_index, const Query&
   key << state_index << "|damage|" << cls << "|" << site << "|";
   for (const double p : positions) key << p << ",";
   ServedState* st = &state;
-  auto job = [st, site, cls, positions, site_name](const std::shared_ptr<const ComputeResult>& have)
-      -> std::shared_ptr<const ComputeResult> {
+  auto job = [st, site, cls, positions, site_name](
+                 const std::shared_ptr<const ComputeResult>& have) -> std::shared_ptr<const ComputeResult> {
     PosteriorAt p = read_posterior_at(*st, site, cls);
     if (have && have->seq == p.seq && p.seq != 0) return nullptr;
     const site::Site& where = *st->config().sites[site].site;
     const damage::DamageOptions options;  // damage's defaults, as ssrfleet damage computes them
-    const records::DamageProfile d = damage::predict_damage_mixture(p.classes, p.shares, where, positions, options);
+    const records::DamageProfile d =
+        damage::predict_damage_mixture(p.classes, p.shares, where, positions, options);
     json a4 = {{"mean", json::array()}, {"q025", json::array()}, {"q975", json::array()}};
     json hot = json::array(), dlc = json::array(), esal = json::array();
     for (std::size_t i = 0; i < d.position_m.size(); ++i) {
@@ -298,18 +322,29 @@ ApiResponse api_damage(ServedState& state, std::size_t state_index, const Query&
       dlc.push_back(number(d.dlc[i]));
       esal.push_back(number(d.esal_per_million[i]));
       if (d.hot_spot[i]) {
-        hot.push_back({{"position_m", d.position_m[i]}, {"a4", number(d.powers[1].mean[i])},
-                       {"a4_q975", number(d.powers[1].q975[i])}, {"esal_per_million", number(d.esal_per_million[i])}});
+        hot.push_back({{"position_m", d.position_m[i]},
+                       {"a4", number(d.powers[1].mean[i])},
+                       {"a4_q975", number(d.powers[1].q975[i])},
+                       {"esal_per_million", number(d.esal_per_million[i])}});
       }
     }
     auto r = std::make_shared<ComputeResult>();
     r->seq = p.seq;
     r->trucks = p.trucks;
-    r->body = {{"position_m", d.position_m}, {"a4", a4}, {"dlc", dlc}, {"esal_per_million", esal},
+    r->body = {{"position_m", d.position_m},
+               {"a4", a4},
+               {"dlc", dlc},
+               {"esal_per_million", esal},
                {"static_esal_per_million", number(d.static_esal_per_million)},
-               {"hot_spot_threshold", d.hot_spot_threshold}, {"hot_spots", hot}, {"site", site_name}, {"class", cls},
-               {"units", {{"position_m", "m"}, {"a4", "1 (E[IF^4]; 1 = static)"}, {"dlc", "1"},
-                          {"esal_per_million", "equivalent standard axles (80 kN) per million trucks"}}}};
+               {"hot_spot_threshold", d.hot_spot_threshold},
+               {"hot_spots", hot},
+               {"site", site_name},
+               {"class", cls},
+               {"units",
+                {{"position_m", "m"},
+                 {"a4", "1 (E[IF^4]; 1 = static)"},
+                 {"dlc", "1"},
+                 {"esal_per_million", "equivalent standard axles (80 kN) per million trucks"}}}};
     return r;
   };
   return from_lookup(computations.request(key.str(), snap->report.seq, job), *snap);

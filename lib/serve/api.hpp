@@ -31,6 +31,7 @@ ApiResponse api_rejects(ServedState& state, const Query& q);
 // The SSR along the array: from the snapshot (the history's prediction at the first site's sensors)
 // unless positions, a class or another site are asked for, then from the worker.
 ApiResponse api_ssr(ServedState& state, std::size_t state_index, const Query& q, Computations& computations);
-ApiResponse api_damage(ServedState& state, std::size_t state_index, const Query& q, Computations& computations);
+ApiResponse api_damage(ServedState& state, std::size_t state_index, const Query& q,
+                       Computations& computations);
 
 }  // namespace ssrfleet::serve

@@ -7,6 +7,8 @@
 #include <chrono>
 #include <exception>
 
+#include "util/free_memory.hpp"
+
 namespace ssrfleet::serve {
 
 Computations::Computations(std::size_t queue_limit, std::size_t cache_limit)
@@ -84,6 +86,9 @@ void Computations::run() {
       timed->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       result = timed;
     }
+    // A computation's transient buffers (the posterior file's text and tree, the simulated passes)
+    // are megabytes: handed back at once, so the server's resident memory does not creep.
+    util::return_free_memory();
     lock.lock();
     running_.clear();
     if (result) {

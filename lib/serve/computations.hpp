@@ -24,18 +24,19 @@
 namespace ssrfleet::serve {
 
 struct ComputeResult {
-  std::uint64_t seq = 0;      // the checkpoint computed at
-  std::int64_t trucks = 0;    // its trucks
-  int status = 200;           // 200, or the HTTP status of the error in body
+  std::uint64_t seq = 0;    // the checkpoint computed at
+  std::int64_t trucks = 0;  // its trucks
+  int status = 200;         // 200, or the HTTP status of the error in body
   nlohmann::json body;
-  double seconds = 0.0;       // how long the computation took
+  double seconds = 0.0;  // how long the computation took
 };
 
 class Computations {
  public:
   // A job runs on the worker; `have` is the result already cached for its key (or null), so a job
   // whose input has not changed since returns null and leaves it in place.
-  using Job = std::function<std::shared_ptr<const ComputeResult>(const std::shared_ptr<const ComputeResult>& have)>;
+  using Job =
+      std::function<std::shared_ptr<const ComputeResult>(const std::shared_ptr<const ComputeResult>& have)>;
 
   Computations(std::size_t queue_limit, std::size_t cache_limit);
   ~Computations();
@@ -44,8 +45,8 @@ class Computations {
 
   struct Lookup {
     std::shared_ptr<const ComputeResult> result;  // the newest for the key, null if none yet
-    bool pending = false;  // a job for the key is queued or running
-    bool refused = false;  // the queue was full: nothing queued
+    bool pending = false;                         // a job for the key is queued or running
+    bool refused = false;                         // the queue was full: nothing queued
   };
   // The newest result for `key`; queues `job` unless a result at checkpoint >= wanted_seq exists or
   // a job for the key is pending.
@@ -62,7 +63,8 @@ class Computations {
   std::condition_variable wake_;
   std::deque<std::pair<std::string, Job>> queue_;
   std::string running_;  // the key the worker is on ("" when idle)
-  std::map<std::string, std::pair<std::uint64_t, std::shared_ptr<const ComputeResult>>> cache_;  // key -> (use, result)
+  std::map<std::string, std::pair<std::uint64_t, std::shared_ptr<const ComputeResult>>>
+      cache_;  // key -> (use, result)
   std::uint64_t use_clock_ = 0;
   std::uint64_t computed_ = 0;
   bool stop_ = false;

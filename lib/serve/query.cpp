@@ -31,7 +31,8 @@ std::string decode(std::string_view text, const std::string& parameter) {
       const int lo = two_follow ? hex_digit(text[i + 2]) : -1;
       if (hi < 0 || lo < 0) throw QueryError(parameter, "a '%' must be followed by two hexadecimal digits");
       const char decoded = static_cast<char>(hi * 16 + lo);
-      if (is_control(decoded)) throw QueryError(parameter, "control characters (such as %00) are not allowed");
+      if (is_control(decoded))
+        throw QueryError(parameter, "control characters (such as %00) are not allowed");
       out.push_back(decoded);
       i += 2;
     } else if (is_control(c)) {
@@ -112,7 +113,8 @@ void Query::only(std::initializer_list<std::string_view> allowed) const {
     if (!known) {
       std::string list;
       for (const std::string_view a : allowed) list.append(list.empty() ? "" : ", ").append(a);
-      throw QueryError(name, "unknown parameter here (this path takes: " + (list.empty() ? "none" : list) + ")");
+      throw QueryError(name,
+                       "unknown parameter here (this path takes: " + (list.empty() ? "none" : list) + ")");
     }
   }
 }
@@ -124,7 +126,8 @@ std::optional<std::string> Query::get(std::string_view name) const {
   return std::nullopt;
 }
 
-std::int64_t Query::integer(std::string_view name, std::int64_t fallback, std::int64_t min, std::int64_t max) const {
+std::int64_t Query::integer(std::string_view name, std::int64_t fallback, std::int64_t min,
+                            std::int64_t max) const {
   const auto text = get(name);
   if (!text) return fallback;
   std::int64_t v = 0;
@@ -134,8 +137,8 @@ std::int64_t Query::integer(std::string_view name, std::int64_t fallback, std::i
     throw QueryError(std::string(name), "'" + text->substr(0, 40) + "' is not a whole number");
   }
   if (v < min || v > max) {
-    throw QueryError(std::string(name),
-                     std::to_string(v) + " is outside [" + std::to_string(min) + ", " + std::to_string(max) + "]");
+    throw QueryError(std::string(name), std::to_string(v) + " is outside [" + std::to_string(min) + ", " +
+                                            std::to_string(max) + "]");
   }
   return v;
 }
@@ -145,8 +148,8 @@ std::optional<std::string> Query::label(std::string_view name) const {
   if (!text || text->empty()) return std::nullopt;
   bool ok = text->size() <= 64;
   for (const char c : *text) {
-    ok = ok && ((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '.' ||
-                c == '-');
+    ok = ok && ((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' ||
+                c == '.' || c == '-');
   }
   if (!ok) throw QueryError(std::string(name), "a name is 1 to 64 of A-Z a-z 0-9 _ . -");
   return text;
@@ -183,7 +186,8 @@ std::vector<double> parse_positions_value(const std::string& parameter, std::str
   while (start <= text.size()) {
     std::size_t comma = text.find(',', start);
     if (comma == std::string_view::npos) comma = text.size();
-    if (p.size() == kMaxPositions) throw QueryError(parameter, "more than " + std::to_string(kMaxPositions) + " positions");
+    if (p.size() == kMaxPositions)
+      throw QueryError(parameter, "more than " + std::to_string(kMaxPositions) + " positions");
     p.push_back(finite_number(parameter, text.substr(start, comma - start)));
     if (p.size() > 1 && !(p.back() > p[p.size() - 2])) {
       throw QueryError(parameter, "positions must be strictly increasing");

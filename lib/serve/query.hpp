@@ -5,7 +5,8 @@
 //
 // Limits (docs/serve.md): a query of at most kMaxQueryBytes bytes, at most kMaxParameters
 // parameters, each named by 1 to 32 of [a-z_], each at most once, values percent-decoded to at
-// most kMaxValueBytes bytes with no control character; positions at most kMaxPositions, finite and strictly increasing.
+// most kMaxValueBytes bytes with no control character; positions at most kMaxPositions, finite and strictly
+// increasing.
 #pragma once
 
 #include <cstddef>
@@ -46,7 +47,8 @@ class Query {
   // The value, none if absent.
   std::optional<std::string> get(std::string_view name) const;
   // An integer in [min, max], `fallback` if absent; QueryError naming it otherwise.
-  std::int64_t integer(std::string_view name, std::int64_t fallback, std::int64_t min, std::int64_t max) const;
+  std::int64_t integer(std::string_view name, std::int64_t fallback, std::int64_t min,
+                       std::int64_t max) const;
   // A label: 1 to 64 of [A-Za-z0-9_.-] (a state, class or site name), none if absent or empty.
   std::optional<std::string> label(std::string_view name) const;
   // Positions in metres: "76,77.5,80" or "FIRST:STEP:LAST" (inclusive, computed as FIRST + i STEP,

@@ -89,7 +89,8 @@ void RejectsTail::refresh(std::size_t keep) {
   }
   // Count markers in chunks, each ending at a whole line.
   while (scanned < size) {
-    const std::string chunk = read_range(fd, scanned, static_cast<std::size_t>(std::min<std::uint64_t>(size - scanned, 1 << 20)));
+    const std::string chunk =
+        read_range(fd, scanned, static_cast<std::size_t>(std::min<std::uint64_t>(size - scanned, 1 << 20)));
     const std::size_t last_newline = chunk.rfind('\n');
     if (last_newline == std::string::npos) break;
     const std::string_view whole(chunk.data(), last_newline + 1);

@@ -16,7 +16,7 @@ namespace ssrfleet::serve {
 struct RejectedRecord {
   std::int64_t line = 0;  // the record's line in the stream's input
   std::string field, reason;
-  std::string record;     // the record as it came (cut to 512 bytes)
+  std::string record;  // the record as it came (cut to 512 bytes)
 };
 
 // Parses whole lines of rejects.csv; the last `limit` records, oldest first.

@@ -2,6 +2,7 @@
 
 #include <httplib.h>
 
+#include <algorithm>
 #include <chrono>
 #include <exception>
 
@@ -11,6 +12,7 @@
 #include "serve/rate_limit.hpp"
 #include "serve/web_assets.hpp"
 #include "util/errors.hpp"
+#include "util/free_memory.hpp"
 
 namespace ssrfleet::serve {
 
@@ -94,8 +96,10 @@ void Server::stop() {
 }
 
 void Server::poll_loop() {
-  while (!stopping_.load()) {
+  for (long polls = 1; !stopping_.load(); ++polls) {
     for (auto& s : states_) s->refresh();
+    // The request threads' freed buffers (answers of up to a few hundred kB) go back every 10 s.
+    if (polls % static_cast<long>(std::max(1.0, 10.0 / options_.poll_s)) == 0) util::return_free_memory();
     for (int i = 0; i < 10 && !stopping_.load(); ++i) {
       std::this_thread::sleep_for(std::chrono::duration<double>(options_.poll_s / 10.0));
     }
@@ -107,7 +111,8 @@ void Server::handle(const httplib::Request& req, httplib::Response& res) {
     res.set_header("Allow", "GET, HEAD");
     // Its body (if any) was not read: close rather than parse it as the next request.
     res.set_header("Connection", "close");
-    send_error(res, 405, "method " + req.method.substr(0, 16) + " is not allowed: only GET and HEAD", "method");
+    send_error(res, 405, "method " + req.method.substr(0, 16) + " is not allowed: only GET and HEAD",
+               "method");
     return;
   }
   if (!req.body.empty() || req.has_header("Content-Length") || req.has_header("Transfer-Encoding")) {
@@ -120,8 +125,9 @@ void Server::handle(const httplib::Request& req, httplib::Response& res) {
   if (const double wait_s = limiter_->take(req.remote_addr, now_s()); wait_s > 0.0) {
     res.set_header("Retry-After", std::to_string(static_cast<int>(std::ceil(wait_s))));
     send_error(res, 429,
-               "too many requests from " + req.remote_addr + ": at most " + std::to_string(options_.rate_per_s) +
-                   " a second (bursts of " + std::to_string(options_.burst) + ")",
+               "too many requests from " + req.remote_addr + ": at most " +
+                   std::to_string(options_.rate_per_s) + " a second (bursts of " +
+                   std::to_string(options_.burst) + ")",
                nullptr);
     return;
   }
@@ -136,8 +142,9 @@ void Server::handle(const httplib::Request& req, httplib::Response& res) {
       return;
     }
     res.set_header("Cache-Control", "no-cache");
-    res.set_header("Content-Security-Policy",
-                   "default-src 'self'; style-src 'self' 'unsafe-inline'; img-src 'self' data:; object-src 'none'");
+    res.set_header(
+        "Content-Security-Policy",
+        "default-src 'self'; style-src 'self' 'unsafe-inline'; img-src 'self' data:; object-src 'none'");
     res.set_content(asset->body.data(), asset->body.size(), std::string(asset->content_type).c_str());
     return;
   }
@@ -185,7 +192,8 @@ void Server::route_api(const std::string& path, const std::string& query, httpli
       known = false;
     }
     if (!known) {
-      send_error(res, 404, "no such path: " + path.substr(0, 200) + " (docs/serve.md lists the API)", nullptr);
+      send_error(res, 404, "no such path: " + path.substr(0, 200) + " (docs/serve.md lists the API)",
+                 nullptr);
       return;
     }
     if (out.status == 202 || out.status == 503) res.set_header("Retry-After", "1");

@@ -32,12 +32,12 @@ class RateLimiter;
 
 struct ServeOptions {
   std::string bind = "127.0.0.1";
-  int port = 8080;            // 0: any free port (bound_port() says which)
-  double rate_per_s = 20.0;   // per client address; <= 0 turns the limit off
+  int port = 8080;           // 0: any free port (bound_port() says which)
+  double rate_per_s = 20.0;  // per client address; <= 0 turns the limit off
   double burst = 40.0;
   int http_threads = 8;
-  double poll_s = 0.25;       // how often each state is looked at
-  double idle_after_s = 60.0; // a running stream with no checkpoint for this long is "idle"
+  double poll_s = 0.25;          // how often each state is looked at
+  double idle_after_s = 60.0;    // a running stream with no checkpoint for this long is "idle"
   std::size_t queue_limit = 8;   // distinct computations waiting
   std::size_t cache_limit = 32;  // computation results kept
 };

@@ -121,7 +121,8 @@ std::optional<Snapshot> StateReader::snapshot() {
   if (!open_locked()) return std::nullopt;
   const ReadTransaction transaction(db_, path_);
   {
-    Statement has(db_, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'reports';", path_);
+    Statement has(db_, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'reports';",
+                  path_);
     if (!has.next() || has.integer(0) == 0) return std::nullopt;
   }
   Snapshot snap;
@@ -144,7 +145,8 @@ std::optional<Snapshot> StateReader::snapshot() {
   }
   {
     // rowid order is the order written, the one the checksum covers.
-    Statement s(db_, "SELECT class, name, mean, sd, q025, q975 FROM hyperparameters WHERE seq = ? ORDER BY rowid;",
+    Statement s(db_,
+                "SELECT class, name, mean, sd, q025, q975 FROM hyperparameters WHERE seq = ? ORDER BY rowid;",
                 path_);
     s.bind(1, static_cast<std::int64_t>(r.seq));
     while (s.next()) {
@@ -160,12 +162,14 @@ std::optional<Snapshot> StateReader::snapshot() {
                 "WHERE seq = ? ORDER BY rowid;",
                 path_);
     s.bind(1, static_cast<std::int64_t>(r.seq));
-    while (s.next()) r.predictions.push_back({s.real(0), s.real(1), s.real(2), s.real(3), s.real(4), s.real(5)});
+    while (s.next())
+      r.predictions.push_back({s.real(0), s.real(1), s.real(2), s.real(3), s.real(4), s.real(5)});
   }
   if (hex(io::history_row_checksum(r)) != stored_checksum) {
     throw DataError(path_, 0, "row_checksum",
-                    "report " + std::to_string(r.seq) + " does not match its checksum: the history was changed or "
-                    "damaged after it was written");
+                    "report " + std::to_string(r.seq) +
+                        " does not match its checksum: the history was changed or "
+                        "damaged after it was written");
   }
   {
     Statement s(db_, "SELECT value FROM meta WHERE key = 'model';", path_);
@@ -208,10 +212,12 @@ std::vector<HistorySeries> StateReader::history(const HistoryQuery& q) {
   const std::int64_t span = to - from + 1;
   // Every step-th report from `from` takes at most points - 1 places, the range's last one more.
   const std::int64_t places = std::max(1, q.points - 2);
-  const std::int64_t step = q.points <= 2 ? std::max<std::int64_t>(1, span) : std::max<std::int64_t>(1, (span - 1 + places - 1) / places);
+  const std::int64_t step = q.points <= 2 ? std::max<std::int64_t>(1, span)
+                                          : std::max<std::int64_t>(1, (span - 1 + places - 1) / places);
   // Every step-th report from `from`, and the range's last (the newest point is always drawn).
   Statement s(db_,
-              "SELECT r.trucks, h.name, h.mean, h.q025, h.q975 FROM reports r JOIN hyperparameters h ON h.seq = r.seq "
+              "SELECT r.trucks, h.name, h.mean, h.q025, h.q975 FROM reports r JOIN hyperparameters h ON "
+              "h.seq = r.seq "
               "WHERE r.seq <= ?1 AND h.class = ?2 AND r.trucks BETWEEN ?3 AND ?4 "
               "AND ((r.trucks - ?3) % ?5 = 0 OR r.trucks = ?4) AND (?6 = '' OR h.name = ?6) "
               "ORDER BY r.seq, h.rowid;",

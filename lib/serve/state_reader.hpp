@@ -21,8 +21,8 @@ struct sqlite3;
 namespace ssrfleet::serve {
 
 struct Snapshot {
-  records::HistoryReport report;  // the latest checkpoint's report, its row checksum verified
-  std::string model;              // the state's model spec (meta.model)
+  records::HistoryReport report;     // the latest checkpoint's report, its row checksum verified
+  std::string model;                 // the state's model spec (meta.model)
   std::vector<std::string> classes;  // the vehicle classes of that report ("" alone: no classes)
   // The oldest report written at most 60 s before this one: trucks per minute at time t are
   // (report.trucks - window_trucks) / (t - window_time_s) * 60, which falls as a stream stalls.
@@ -38,9 +38,9 @@ struct HistorySeries {
 };
 
 struct HistoryQuery {
-  std::uint64_t max_seq = 0;        // the snapshot's checkpoint: nothing later is read
-  std::string vehicle_class;        // "" for a state without classes
-  std::optional<std::string> name;  // one hyperparameter, or all of them
+  std::uint64_t max_seq = 0;                    // the snapshot's checkpoint: nothing later is read
+  std::string vehicle_class;                    // "" for a state without classes
+  std::optional<std::string> name;              // one hyperparameter, or all of them
   std::int64_t from_trucks = 1, to_trucks = 0;  // inclusive; to 0 = up to the checkpoint
   int points = 400;  // at most this many reports, evenly spaced in trucks, the last always included
 };

@@ -62,7 +62,8 @@ LockState lock_state(const std::string& state_dir) {
   return s;
 }
 
-std::string stream_status(const LockState& lock, bool has_checkpoint, double checkpoint_age_s, double idle_after_s) {
+std::string stream_status(const LockState& lock, bool has_checkpoint, double checkpoint_age_s,
+                          double idle_after_s) {
   if (!lock.known) {
     if (!has_checkpoint) return "waiting";
     return checkpoint_age_s > idle_after_s ? "stopped" : "running";

@@ -18,9 +18,9 @@ std::optional<long> flock_holder(std::string_view proc_locks, unsigned dev_major
                                  unsigned long inode);
 
 struct LockState {
-  bool lock_file = false;     // DIR/lock exists (a stream has run on this state)
-  std::optional<long> pid;    // the running stream's process id
-  bool known = true;          // false where /proc/locks cannot be read (then pid is none)
+  bool lock_file = false;   // DIR/lock exists (a stream has run on this state)
+  std::optional<long> pid;  // the running stream's process id
+  bool known = true;        // false where /proc/locks cannot be read (then pid is none)
 };
 
 LockState lock_state(const std::string& state_dir);
@@ -29,6 +29,7 @@ LockState lock_state(const std::string& state_dir);
 // idle_after_s: a followed file that stopped growing), "stopped" (no process holds the lock), or
 // "waiting" (no checkpoint yet). Without /proc/locks, a checkpoint older than idle_after_s counts as
 // stopped.
-std::string stream_status(const LockState& lock, bool has_checkpoint, double checkpoint_age_s, double idle_after_s);
+std::string stream_status(const LockState& lock, bool has_checkpoint, double checkpoint_age_s,
+                          double idle_after_s);
 
 }  // namespace ssrfleet::serve
