@@ -12,6 +12,7 @@
 
 #include "io/history_db.hpp"
 #include "serve/rejects_tail.hpp"
+#include "serve/served_state.hpp"
 #include "serve/state_reader.hpp"
 #include "serve/stream_status.hpp"
 #include "test_support.hpp"
@@ -153,4 +154,23 @@ TEST_CASE("serve rejects: counted incrementally, and again when a resume cuts th
   tail.refresh();
   CHECK(tail.total() < 3000);
   CHECK(tail.total() > 1000);
+}
+
+TEST_CASE("serve answers cache: only the checkpoint's own answer comes back, older ones go", "[serve]") {
+  test::TempDir dir;
+  serve::ServedState state({"s", dir.path().string(), {}});
+  state.store_answer("points=300", 5, std::make_shared<const std::string>("five"));
+  REQUIRE(state.cached_answer("points=300", 5));
+  CHECK(*state.cached_answer("points=300", 5) == "five");
+  CHECK(state.cached_answer("points=300", 6) == nullptr);  // the stream moved on: ask the database
+  CHECK(state.cached_answer("points=10", 5) == nullptr);
+  state.store_answer("points=10", 6, std::make_shared<const std::string>("six"));
+  CHECK(state.cached_answer("points=300", 5) == nullptr);  // dropped with its checkpoint
+  for (int i = 0; i < 40; ++i) {
+    std::string key(1, 'q');
+    key.append(std::to_string(i));
+    state.store_answer(key, 6, std::make_shared<const std::string>("x"));
+  }
+  CHECK(state.cached_answer("q39", 6) == nullptr);  // at most 16 kept
+  CHECK(*state.cached_answer("points=10", 6) == "six");
 }

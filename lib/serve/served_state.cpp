@@ -38,4 +38,19 @@ ServedState::View ServedState::view() const {
   return {snapshot_, lock_, error_};
 }
 
+std::shared_ptr<const std::string> ServedState::cached_answer(const std::string& key, std::uint64_t seq) const {
+  const std::lock_guard<std::mutex> guard(mutex_);
+  const auto it = answers_.find(key);
+  return it != answers_.end() && it->second.first == seq ? it->second.second : nullptr;
+}
+
+void ServedState::store_answer(const std::string& key, std::uint64_t seq, std::shared_ptr<const std::string> body) {
+  const std::lock_guard<std::mutex> guard(mutex_);
+  for (auto it = answers_.begin(); it != answers_.end();) {
+    it = it->second.first < seq ? answers_.erase(it) : std::next(it);
+  }
+  if (answers_.size() >= 16) return;  // 16 different questions of one checkpoint: the rest are not kept
+  answers_[key] = {seq, std::move(body)};
+}
+
 }  // namespace ssrfleet::serve

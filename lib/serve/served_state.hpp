@@ -5,6 +5,8 @@
 // and a thousand requests cost the database nothing.
 #pragma once
 
+#include <cstdint>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -44,6 +46,12 @@ class ServedState {
   };
   View view() const;
 
+  // Answers that cost a database query (the history), kept per checkpoint: every page asks the
+  // same question after each checkpoint, and only the first asker pays for it. Keyed by the query
+  // string; an answer of an older checkpoint is never returned, and at most 16 are kept.
+  std::shared_ptr<const std::string> cached_answer(const std::string& key, std::uint64_t seq) const;
+  void store_answer(const std::string& key, std::uint64_t seq, std::shared_ptr<const std::string> body);
+
   StateReader& reader() { return reader_; }
   const RejectsTail& rejects() const { return rejects_; }
   const StateConfig& config() const { return config_; }
@@ -56,6 +64,7 @@ class ServedState {
   std::shared_ptr<const Snapshot> snapshot_;
   LockState lock_;
   std::string error_;
+  std::map<std::string, std::pair<std::uint64_t, std::shared_ptr<const std::string>>> answers_;
 };
 
 }  // namespace ssrfleet::serve

@@ -184,7 +184,27 @@ void Server::route_api(const std::string& path, const std::string& query, httpli
       std::size_t index = 0;
       while (states_[index].get() != &state) ++index;
       if (path == "/api/summary") out = api_summary(state, q, now_s(), options_.idle_after_s);
-      if (path == "/api/history") out = api_history(state, q);
+      if (path == "/api/history") {
+        const auto snapshot = state.view().snapshot;
+        if (snapshot) {
+          if (const auto body = state.cached_answer(query, snapshot->report.seq)) {
+            res.status = 200;
+            res.set_header("Cache-Control", "no-store");
+            res.set_content(body->data(), body->size(), "application/json");
+            return;
+          }
+        }
+        out = api_history(state, q);
+        if (out.status == 200) {
+          auto body = std::make_shared<const std::string>(
+              out.body.dump(-1, ' ', false, json::error_handler_t::replace));
+          state.store_answer(query, out.body["checkpoint"]["seq"].get<std::uint64_t>(), body);
+          res.status = 200;
+          res.set_header("Cache-Control", "no-store");
+          res.set_content(body->data(), body->size(), "application/json");
+          return;
+        }
+      }
       if (path == "/api/rejects") out = api_rejects(state, q);
       if (path == "/api/ssr") out = api_ssr(state, index, q, *computations_);
       if (path == "/api/damage") out = api_damage(state, index, q, *computations_);
