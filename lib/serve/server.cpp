@@ -1,6 +1,7 @@
 #include "serve/server.hpp"
 
 #include <httplib.h>
+#include <sys/socket.h>
 
 #include <algorithm>
 #include <chrono>
@@ -21,6 +22,7 @@ using nlohmann::json;
 namespace {
 
 constexpr std::size_t kMaxBodyBytes = 4096;
+constexpr int kListenBacklog = 256;  // connections waiting for accept()
 
 double now_s() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
@@ -51,6 +53,14 @@ Server::Server(std::vector<StateConfig> states, ServeOptions options)
   http_->set_read_timeout(5, 0);
   http_->set_write_timeout(5, 0);
   http_->set_payload_max_length(kMaxBodyBytes);
+  // httplib listens with a backlog of 5 connections: a second's worth of pages polling at once
+  // overflows it, and each connection refused costs its client a 1 s SYN retry. The listening
+  // socket is remembered here (the library's own options are kept) and given a real backlog after
+  // bind() (Linux takes a second listen() as a new backlog).
+  http_->set_socket_options([this](socket_t sock) {
+    httplib::default_socket_options(sock);
+    listen_fd_ = sock;
+  });
   http_->set_default_headers({{"X-Content-Type-Options", "nosniff"}, {"Referrer-Policy", "no-referrer"}});
   // Every request comes through here, whatever its method and path: the routing is ours.
   http_->set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
@@ -84,6 +94,7 @@ int Server::bind() {
     throw IoError("cannot listen on " + options_.bind + ":" + std::to_string(options_.port) +
                   " (in use, or not an address of this machine)");
   }
+  if (listen_fd_ >= 0) ::listen(listen_fd_, kListenBacklog);
   poller_ = std::thread([this] { poll_loop(); });
   return port_;
 }

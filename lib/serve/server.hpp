@@ -68,6 +68,7 @@ class Server {
   std::unique_ptr<Computations> computations_;
   std::unique_ptr<RateLimiter> limiter_;
   int port_ = 0;
+  int listen_fd_ = -1;  // the listening socket, as httplib made it
   std::atomic<bool> stopping_{false};
   std::thread poller_;
 };
