@@ -48,8 +48,10 @@ class Browser:
         self.from_browser, from_browser_w = os.pipe()
 
         def fds():
-            os.dup2(to_browser_r, 3)
-            os.dup2(from_browser_w, 4)
+            # Moved out of the way first: either may itself be fd 3 or 4.
+            reads, writes = os.dup(to_browser_r), os.dup(from_browser_w)
+            os.dup2(reads, 3)
+            os.dup2(writes, 4)
 
         self.log = open(os.path.join(out_dir, "chromium.log"), "w")
         self.proc = subprocess.Popen([chromium, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",

@@ -10,7 +10,7 @@ const HYPER_NAMES = { K: "K: fleet mean suspension stiffness", sigma_k: "σk: it
   sigma_if: "σIF: impact-factor noise of the sensors" };
 
 const view = { state: null, cls: "", site: "", seq: -1, rejected: -1, damageAt: 0, damageSeq: -1, damageWanted: false,
-  charts: {}, states: [], positions: "" };
+  charts: {}, states: [], positions: "", positionsWanted: false };
 
 const $ = (id) => document.getElementById(id);
 const fmt = (v, digits = 4) => (v === null || v === undefined ? "–" : Number(v).toPrecision(digits));
@@ -160,6 +160,7 @@ async function refreshDamage() {
 async function refreshPositions() {
   if (!view.positions) return;
   const { status, body } = await getJson("/api/ssr", { positions: view.positions, class: view.cls, site: view.site });
+  view.positionsWanted = status === 202 || (status === 200 && !body.current);  // asked again next second
   if (status === 202) { $("positions-status").textContent = "computing…"; return; }
   if (status !== 200) { $("positions-status").textContent = body.error + " (" + body.parameter + ")"; return; }
   $("positions-status").textContent = "after " + body.checkpoint.trucks + " trucks" + (body.current ? "" : " (updating)");
@@ -220,6 +221,8 @@ async function tick() {
       noteCheckpoint(cp);
       view.seq = cp.seq;
       await onCheckpoint();
+    } else if (view.positionsWanted) {
+      await refreshPositions();
     }
     if ((cp.seq !== view.damageSeq || view.damageWanted) && Date.now() - view.damageAt >= DAMAGE_EVERY_MS) {
       await refreshDamage();
