@@ -190,7 +190,8 @@ def main():
             browser.call("Emulation.setDeviceMetricsOverride",
                          {"width": 1280, "height": 1500, "deviceScaleFactor": 1, "mobile": False})
             browser.call("Page.navigate", {"url": url})
-            s1 = wait_page(browser, "the first checkpoint", lambda s: s["trucks"] >= first and s["points"] > 0, 30)
+            s1 = wait_page(browser, "the first checkpoint", lambda s: s["trucks"] >= first and s["points"] > 0 and s["hyper"] > 0,
+                           30)
             print("first look: %d trucks, %d SSR points, %d hyperparameter charts, status %s" %
                   (s1["trucks"], s1["points"], s1["hyper"], s1["status"]))
             if s1["points"] != SENSORS:
