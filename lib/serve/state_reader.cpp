@@ -201,10 +201,17 @@ std::vector<HistorySeries> StateReader::history(const HistoryQuery& q) {
     if (!s.next()) return out;
     last_trucks = s.integer(0);
   }
-  std::int64_t first_trucks = 1;  // a state resumed from an older one may start past 1
+  // The class's first report: a state resumed from an older one may start past 1, and a vehicle
+  // class starts at its first truck.
+  std::int64_t first_trucks = 1;
   {
-    Statement s(db_, "SELECT trucks FROM reports ORDER BY seq ASC LIMIT 1;", path_);
-    if (s.next()) first_trucks = s.integer(0);
+    Statement s(db_,
+                "SELECT r.trucks FROM hyperparameters h JOIN reports r ON r.seq = h.seq WHERE h.class = ? "
+                "ORDER BY h.seq ASC LIMIT 1;",
+                path_);
+    s.bind(1, q.vehicle_class);
+    if (!s.next()) return out;
+    first_trucks = s.integer(0);
   }
   const std::int64_t from = std::max<std::int64_t>(first_trucks, q.from_trucks);
   const std::int64_t to = q.to_trucks > 0 ? std::min(q.to_trucks, last_trucks) : last_trucks;
