@@ -270,7 +270,8 @@ TEST_CASE("serve API: a client past its rate gets 429 and Retry-After, others do
   const auto refused = http_get(s.port, "/api/summary");
   CHECK(refused.status == 429);
   CHECK(refused.header("retry-after") == "1");
-  CHECK(refused.json()["error"].get<std::string>().find("too many requests") != std::string::npos);
+  CHECK(refused.json()["error"].get<std::string>().find("too many requests from 127.0.0.1: at most 2 a second "
+                                                        "(bursts of 4)") != std::string::npos);
   // Another address of the loopback network is another client.
   const auto other = http_raw(s.port, "GET /api/summary HTTP/1.1\r\nHost: x\r\n\r\n", "127.0.0.2");
   CHECK(other.status == 200);

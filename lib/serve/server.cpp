@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <exception>
+#include <sstream>
 
 #include "serve/api.hpp"
 #include "serve/computations.hpp"
@@ -135,11 +136,10 @@ void Server::handle(const httplib::Request& req, httplib::Response& res) {
   }
   if (const double wait_s = limiter_->take(req.remote_addr, now_s()); wait_s > 0.0) {
     res.set_header("Retry-After", std::to_string(static_cast<int>(std::ceil(wait_s))));
-    send_error(res, 429,
-               "too many requests from " + req.remote_addr + ": at most " +
-                   std::to_string(options_.rate_per_s) + " a second (bursts of " +
-                   std::to_string(options_.burst) + ")",
-               nullptr);
+    std::ostringstream why;
+    why << "too many requests from " << req.remote_addr << ": at most " << options_.rate_per_s
+        << " a second (bursts of " << options_.burst << ")";
+    send_error(res, 429, why.str(), nullptr);
     return;
   }
   // The raw target: the path as sent (no decoding, so "%2e%2e" stays what it is) and the query.
