@@ -150,8 +150,8 @@ async function refreshDamage() {
   if (status !== 200) { $("damage-note").textContent = body.error || ""; return; }
   view.damageWanted = !body.current;
   view.damageSeq = body.checkpoint.seq;
-  $("damage-note").textContent = "after " + body.checkpoint.trucks + " trucks; hot spot: a₄ 97.5 % above " +
-    body.hot_spot_threshold;
+  $("damage-note").textContent = "after " + body.checkpoint.trucks + " trucks; a hot spot: the 95th percentile of " +
+    "a₄ over the posterior above " + body.hot_spot_threshold;
   fillTable("damage-table", body.hot_spots.map((h) => [String(h.position_m), fmt(h.a4), fmt(h.a4_q975),
     fmt(h.esal_per_million)]), "no hot spot (a₄ stays under " + body.hot_spot_threshold + " everywhere)", 4);
   $("damage-table").dataset.hotSpots = String(body.hot_spots.length);
