@@ -361,3 +361,32 @@ TEST_CASE("serve: opens nothing of the state but the files it reads, and changes
     CHECK((name == "history.sqlite-wal" || name == "history.sqlite-shm"));
   }
 }
+
+TEST_CASE("serve API: several states, each named; without a name the answer says to give one", "[serve]") {
+  site::Site site(site::load_road("AS1", nullptr), site::SiteOptions{});
+  test::TempDir empty;
+  serve::ServeOptions options;
+  options.port = 0;
+  serve::Server server({{"north", streamed().state, {{"", &site}}}, {"later", empty.file("not_yet"), {{"", &site}}}},
+                       options);
+  const int port = server.bind();
+  std::thread thread([&] { server.run(); });
+  const auto states = http_get(port, "/api/states").json()["states"];
+  CHECK(states.size() == 2);
+  CHECK(states[1]["name"] == "later");
+  const auto unnamed = http_get(port, "/api/summary");
+  CHECK(unnamed.status == 400);
+  CHECK(unnamed.json()["parameter"] == "state");
+  CHECK(http_get(port, "/api/summary?state=north").json()["checkpoint"]["trucks"] == 30);
+  // A state whose stream has not made it yet: waiting, and 503 for what needs a checkpoint.
+  const auto later = http_get(port, "/api/summary?state=later");
+  CHECK(later.status == 200);
+  CHECK(later.json()["status"] == "waiting");
+  CHECK(later.json()["checkpoint"].is_null());
+  const auto ssr = http_get(port, "/api/ssr?state=later");
+  CHECK(ssr.status == 503);
+  CHECK(ssr.header("retry-after") == "1");
+  CHECK_FALSE(std::filesystem::exists(empty.file("not_yet")));  // nothing created on its behalf
+  server.stop();
+  thread.join();
+}
