@@ -390,3 +390,13 @@ TEST_CASE("serve API: several states, each named; without a name the answer says
   server.stop();
   thread.join();
 }
+
+TEST_CASE("serve: a second server on a port in use is refused, not sharing it", "[serve]") {
+  RunningServer first(streamed().state);
+  site::Site site(site::load_road("AS1", nullptr), site::SiteOptions{});
+  serve::ServeOptions options;
+  options.port = first.port;
+  serve::Server second({{"site_state", streamed().state, {{"", &site}}}}, options);
+  CHECK_THROWS_AS(second.bind(), IoError);
+  CHECK(http_get(first.port, "/api/summary").status == 200);
+}

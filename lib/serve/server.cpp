@@ -54,12 +54,15 @@ Server::Server(std::vector<StateConfig> states, ServeOptions options)
   http_->set_read_timeout(5, 0);
   http_->set_write_timeout(5, 0);
   http_->set_payload_max_length(kMaxBodyBytes);
-  // httplib listens with a backlog of 5 connections: a second's worth of pages polling at once
-  // overflows it, and each connection refused costs its client a 1 s SYN retry. The listening
-  // socket is remembered here (the library's own options are kept) and given a real backlog after
-  // bind() (Linux takes a second listen() as a new backlog).
+  // The listening socket: SO_REUSEADDR only (a restart may bind at once), not httplib's default
+  // SO_REUSEPORT, with which a second server on the same port would bind too and silently take
+  // half the connections. httplib listens with a backlog of 5 connections: a second's worth of pages
+  // polling at once overflows it, and each connection refused costs its client a 1 s SYN retry. So
+  // the socket is remembered here and given a real backlog after bind() (Linux takes a second
+  // listen() as a new backlog).
   http_->set_socket_options([this](socket_t sock) {
-    httplib::default_socket_options(sock);
+    int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
     listen_fd_ = sock;
   });
   http_->set_default_headers({{"X-Content-Type-Options", "nosniff"}, {"Referrer-Policy", "no-referrer"}});
