@@ -362,7 +362,7 @@ TEST_CASE("serve: opens nothing of the state but the files it reads, and changes
   }
 }
 
-TEST_CASE("serve API: several states, each named; without a name the answer says to give one", "[serve]") {
+TEST_CASE("serve API: several states, each named, and without a name the answer says to give one", "[serve]") {
   site::Site site(site::load_road("AS1", nullptr), site::SiteOptions{});
   test::TempDir empty;
   serve::ServeOptions options;
