@@ -26,6 +26,8 @@ const std::vector<CommandInfo>& command_table() {
         {"weigh", run_weigh, "SSR-corrected static wheel loads from a log of raw tyre forces"},
         {"draws", run_draws,
          "write a posterior's equal-weight draws as CSV or NetCDF4 in ArviZ's layout, for numpy, pandas, xarray"},
+        {"serve", run_serve,
+         "a live web page and JSON API over running streams: SSR, hyperparameters, rejects, damage (read-only)"},
         {"sites", run_sites,
          "check a site manifest, list its sites, collect their posteriors into one table"},
         {"reproduce", run_reproduce,

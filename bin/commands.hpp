@@ -16,5 +16,6 @@ int run_weigh(int argc, const char* const argv[]);
 int run_sites(int argc, const char* const argv[]);
 int run_effects(int argc, const char* const argv[]);
 int run_draws(int argc, const char* const argv[]);
+int run_serve(int argc, const char* const argv[]);
 
 }  // namespace ssrfleet::cli

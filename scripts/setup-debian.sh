@@ -10,19 +10,21 @@
 #                                    it links or includes, gnuplot for the plots
 set -euo pipefail
 # The ssrfleet target: Eigen, Boost (headers, program_options), nlohmann-json, SQLite (the stream's
-# history), NetCDF (the draws file, NetCDF4 in ArviZ's layout); gnuplot renders reproduce's plots
+# history), NetCDF (the draws file, NetCDF4 in ArviZ's layout), cpp-httplib and Chart.js (serve's
+# HTTP server and its page's charts, compiled into the command); gnuplot renders reproduce's plots
 # (without it the scripts are written, not run).
 main_packages=(build-essential cmake libeigen3-dev libboost-dev libboost-program-options-dev
-               nlohmann-json3-dev libsqlite3-dev libnetcdf-dev gnuplot-nox)
+               nlohmann-json3-dev libsqlite3-dev libnetcdf-dev libcpp-httplib-dev libjs-chart.js gnuplot-nox)
 # Beyond the main job: git (CI clones the checkout), Catch2 (tests), sqlite3 (the tests query the
 # history), python3-numpy (the independent check of the convergence diagnostics), python3-xarray
 # and python3-netcdf4 (the draws files opened as a notebook would), GNU parallel
 # (scripts/fit-sites.sh), Open MPI (ssrfleet-mpi and its test), help2man (the man pages), and the
 # Python module `import ssrfleet` (python3-dev, pybind11-dev) with its tests (python3-pytest) and
-# what notebooks use beside it (python3-pandas, python3-matplotlib).
+# what notebooks use beside it (python3-pandas, python3-matplotlib), and chromium (the browser test of
+# serve's page, headless).
 full_packages=("${main_packages[@]}" git catch2 sqlite3 python3-numpy python3-xarray python3-netcdf4 parallel
                libopenmpi-dev openmpi-bin help2man python3-dev pybind11-dev python3-pytest python3-pandas
-               python3-matplotlib)
+               python3-matplotlib chromium)
 case "${1:-}" in
   --main) packages=("${main_packages[@]}") ;;
   "") packages=("${full_packages[@]}") ;;

@@ -152,7 +152,7 @@ std::vector<std::string> listed_commands(const std::string& general_help) {
 }
 
 const std::vector<std::string> kCommands = {"damage", "diagnose", "draws",  "effects", "fit",    "predict",
-                                            "reproduce", "road", "simulate", "sites", "stream", "weigh"};
+                                            "reproduce", "road", "serve", "simulate", "sites", "stream", "weigh"};
 
 // The build tree: the ssrfleet binary sits at its top.
 std::filesystem::path build_dir() { return std::filesystem::path(SSRFLEET_BINARY).parent_path(); }
