@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include <catch2/catch.hpp>
 
 #include "marginal_checkpoint_bytes.hpp"
+#include "thread_ranks.hpp"
 
 #include "fleet/batch_mcmc.hpp"
 #include "fleet/marginal_smc.hpp"
@@ -213,6 +215,41 @@ TEST_CASE("a fit with an effect in a psi window resumes bit-identically, with 1 
   const auto other = fleet::make_extension("tyre_damping", as1());
   fleet::MarginalSmc wrong(as1(), options(128, 4, 2, other.get()));
   CHECK_THROWS_WITH(restore_from(wrong, saved), Catch::Contains("unsprung_mass") && Catch::Contains("tyre_damping"));
+}
+
+// MPI: truck i's Q tables live on rank i % R together (threads stand in for ranks here).
+TEST_CASE("a fit with an effect in a psi window split over 2 ranks has the bits of one process",
+          "[marginal][extension][ranks][heavy]") {
+  const auto records = hidden_effect_log("tyre_damping", 16, 23);
+  const auto ext = fleet::make_extension("tyre_damping", as1());
+  auto opts = [&](const util::Ranks* r) {
+    fleet::MarginalSmc::Options o = options(64, 17, 1, ext.get());
+    o.target.ranks = r;
+    return o;
+  };
+  auto run = [&](fleet::MarginalSmc& smc) {
+    for (std::size_t i = 0; i < records.size(); ++i) {
+      smc.prepare(records, i);
+      smc.absorb(records[i]);
+    }
+  };
+  fleet::MarginalSmc one(as1(), opts(nullptr));
+  run(one);
+  REQUIRE(one.target().rebuilds() >= 1);
+  std::mutex m;
+  std::map<int, bool> same;
+  std::map<int, std::size_t> local;
+  testing::run_on_ranks(2, [&](const util::Ranks& r) {
+    fleet::MarginalSmc split(as1(), opts(&r));
+    run(split);
+    std::lock_guard lock(m);
+    same[r.rank()] = split.target().theta() == one.target().theta() && split.target().psi() == one.target().psi();
+    local[r.rank()] = split.target().node_tables().back().trucks();
+  });
+  CHECK(same[0]);
+  CHECK(same[1]);
+  CHECK(local[0] == 8);
+  CHECK(local[1] == 8);
 }
 
 TEST_CASE("sensor_gain on the marginal core is a usage error naming it and the latent core", "[marginal][extension]") {
