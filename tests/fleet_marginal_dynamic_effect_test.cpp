@@ -111,8 +111,11 @@ TEST_CASE("a linear psi grid interpolates by hat functions, exact for straight l
 // The interpolant against tables built directly at ψ off the nodes. The prototype's record
 // (benchmarks/results/2026-11-28-psi-grid.md, section 3) measured at most 0.038 nats scaled to n
 // for Q = 5 on mean ± 6 sd from n = 20 on, i.e. under 2e-3 nats per truck at n = 20 and under
-// 2e-4 at n = 200, on top of the tables' own noise in ψ (~1e-6 nats per truck). A truck's error
-// over 1e-3 nats would put 0.5 nat on a thousand trucks: the bound.
+// 2e-4 at n = 200. A mean error over 1e-3 nats a truck would put 0.5 nat on 500 trucks: the bound
+// on the mean over the trucks at each ψ. A single truck is held to 1e-2: a direct table is itself
+// noisy in ψ (which nodes it keeps changes with ψ), and for speed_bias at 40 trucks tables built
+// 0.2 % of the window apart differed by up to 7.8e-3 nats while the interpolant stayed within
+// 2.2e-3 of the direct table (this test's first run, which held single trucks to 1e-3).
 TEST_CASE("the psi window's interpolated likelihood matches tables built at psi off its nodes",
           "[marginal][extension][heavy]") {
   for (const std::string name : {"tyre_damping", "speed_bias"}) {
@@ -148,8 +151,19 @@ TEST_CASE("the psi window's interpolated likelihood matches tables built at psi 
       model::TruckTableOptions o;
       o.sigma_ref = target.settings().sigma_ref;
       o.population = target.settings().population;
+      // The search starts where the target's start (MarginalTarget::table_options): at the fleet's
+      // predictive mean once that is a guide. A truck whose (k, k_t) likelihood has two separate
+      // modes keeps the one its search finds, so a table started elsewhere can hold the other.
+      const auto& pop = *target.settings().population;
+      if (pop.k_sd_npm < 0.3 * pop.k_mean_npm && pop.kt_sd_npm < 0.3 * pop.kt_mean_npm) {
+        o.k_start_npm = pop.k_mean_npm;
+        o.kt_start_npm = pop.kt_mean_npm;
+        o.start_is_close = true;
+      }
       double worst = 0.0;
+      double worst_mean = 0.0;
       for (const double f : {0.13, 0.41, 0.5, 0.77}) {
+        double sum_abs = 0.0;
         const double psi = grid->lo() + f * (grid->hi() - grid->lo());
         o.forward = model::ForwardEdit{ext.get(), {psi}};
         const std::vector<double> w = grid->weights(psi);
@@ -163,12 +177,31 @@ TEST_CASE("the psi window's interpolated likelihood matches tables built at psi 
                             marginal.log_likelihood(target.node_tables()[static_cast<std::size_t>(q)].view(i), terms);
           const double exact = marginal.log_likelihood(direct, terms);
           INFO(name << ": psi " << psi << ", truck " << i << ": interpolated " << interpolated << ", direct " << exact);
-          CHECK(std::abs(interpolated - exact) < 1e-3);
+          if (std::abs(interpolated - exact) >= 1e-2) {
+            // Which side is off: the direct table's fit, and direct tables at nearby ψ.
+            std::ostringstream near;
+            near << name << ", truck " << i << " at psi " << psi << ": direct fit (" << direct.fit.stiffness_npm << ", "
+                 << direct.fit.tyre_stiffness_npm << ", " << direct.fit.lateral_m << ") sigma_hat " << direct.fit.sigma_hat
+                 << ", " << direct.nodes() << " entries, interpolated " << interpolated << ", direct " << exact << "; nearby:";
+            for (const double dpsi : {-0.002, -0.001, 0.001, 0.002}) {
+              model::TruckTableOptions on = o;
+              on.forward = model::ForwardEdit{ext.get(), {psi + dpsi * (grid->hi() - grid->lo())}};
+              const model::TruckTable t =
+                  model::build_truck_table(as1(), r.speed_mps, r.sprung_mass_kg, r.impact_factor, target.settings().lattice, on);
+              near << " " << marginal.log_likelihood(t, terms) << " (sigma_hat " << t.fit.sigma_hat << ", z " << t.fit.lateral_m << ")";
+            }
+            WARN(near.str());
+          }
+          CHECK(std::abs(interpolated - exact) < 1e-2);
           worst = std::max(worst, std::abs(interpolated - exact));
+          sum_abs += std::abs(interpolated - exact);
         }
+        INFO(name << " at psi " << psi);
+        CHECK(sum_abs / 8.0 < 1e-3);
+        worst_mean = std::max(worst_mean, sum_abs / 8.0);
       }
       WARN(name << ": window [" << grid->lo() << ", " << grid->hi() << "], largest |interpolated - direct| " << worst
-                << " nats per truck");
+                << " nats per truck, largest mean over the 8 trucks at one psi " << worst_mean);
       // The target's density is the interpolant summed, and a ψ inside the box but outside the
       // window has density 0.
       const double inside = 0.5 * (grid->lo() + grid->hi());
