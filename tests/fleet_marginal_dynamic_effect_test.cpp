@@ -51,7 +51,8 @@ const std::map<std::string, std::string>& hidden_effects() {
 // Table 1 fleet on AS1, σ_IF 0.02, the effect in the data.
 std::vector<records::WimRecord> hidden_effect_log(const std::string& name, int trucks, std::uint64_t seed) {
   const auto& site = as1();
-  const auto fleet = fleet::draw_fleet(fleet::FleetDistribution{}, trucks, site.lateral_min_m(), site.lateral_max_m(), seed);
+  const auto fleet =
+      fleet::draw_fleet(fleet::FleetDistribution{}, trucks, site.lateral_min_m(), site.lateral_max_m(), seed);
   const auto effect = fleet::parse_extension_setting(hidden_effects().at(name), site);
   return fleet::simulate_log(site, fleet, 0.02, seed, *effect.extension, effect.psi).records;
 }
@@ -71,7 +72,8 @@ using test::restore_from;
 
 }  // namespace
 
-TEST_CASE("the four effects inside the dynamics are carried by a psi window, the others are not", "[marginal][extension]") {
+TEST_CASE("the four effects inside the dynamics are carried by a psi window, the others are not",
+          "[marginal][extension]") {
   for (const auto& [name, setting] : hidden_effects()) {
     const auto ext = fleet::make_extension(name, as1());
     CHECK(fleet::carried_by_psi_window(ext.get()));
@@ -83,7 +85,8 @@ TEST_CASE("the four effects inside the dynamics are carried by a psi window, the
   CHECK_FALSE(fleet::carried_by_psi_window(nullptr));
 }
 
-TEST_CASE("a linear psi grid interpolates by hat functions, exact for straight lines", "[marginal][extension]") {
+TEST_CASE("a linear psi grid interpolates by hat functions, exact for straight lines",
+          "[marginal][extension]") {
   const model::PsiGrid g(0.8, 1.25, 17, model::PsiGrid::Kind::kLinear);
   REQUIRE(g.size() == 17);
   CHECK(g.nodes().front() == 0.8);
@@ -169,26 +172,30 @@ TEST_CASE("the psi window's interpolated likelihood matches tables built at psi 
         const std::vector<double> w = grid->weights(psi);
         for (std::size_t i = 0; i < 8; ++i) {
           const auto& r = records[i];
-          const model::TruckTable direct =
-              model::build_truck_table(as1(), r.speed_mps, r.sprung_mass_kg, r.impact_factor, target.settings().lattice, o);
+          const model::TruckTable direct = model::build_truck_table(
+              as1(), r.speed_mps, r.sprung_mass_kg, r.impact_factor, target.settings().lattice, o);
           double interpolated = 0.0;
           for (int q = 0; q < grid->size(); ++q)
-            interpolated += w[static_cast<std::size_t>(q)] *
-                            marginal.log_likelihood(target.node_tables()[static_cast<std::size_t>(q)].view(i), terms);
+            interpolated +=
+                w[static_cast<std::size_t>(q)] *
+                marginal.log_likelihood(target.node_tables()[static_cast<std::size_t>(q)].view(i), terms);
           const double exact = marginal.log_likelihood(direct, terms);
-          INFO(name << ": psi " << psi << ", truck " << i << ": interpolated " << interpolated << ", direct " << exact);
+          INFO(name << ": psi " << psi << ", truck " << i << ": interpolated " << interpolated << ", direct "
+                    << exact);
           if (std::abs(interpolated - exact) >= 1e-2) {
             // Which side is off: the direct table's fit, and direct tables at nearby ψ.
             std::ostringstream near;
-            near << name << ", truck " << i << " at psi " << psi << ": direct fit (" << direct.fit.stiffness_npm << ", "
-                 << direct.fit.tyre_stiffness_npm << ", " << direct.fit.lateral_m << ") sigma_hat " << direct.fit.sigma_hat
-                 << ", " << direct.nodes() << " entries, interpolated " << interpolated << ", direct " << exact << "; nearby:";
+            near << name << ", truck " << i << " at psi " << psi << ": direct fit ("
+                 << direct.fit.stiffness_npm << ", " << direct.fit.tyre_stiffness_npm << ", "
+                 << direct.fit.lateral_m << ") sigma_hat " << direct.fit.sigma_hat << ", " << direct.nodes()
+                 << " entries, interpolated " << interpolated << ", direct " << exact << "; nearby:";
             for (const double dpsi : {-0.002, -0.001, 0.001, 0.002}) {
               model::TruckTableOptions on = o;
               on.forward = model::ForwardEdit{ext.get(), {psi + dpsi * (grid->hi() - grid->lo())}};
-              const model::TruckTable t =
-                  model::build_truck_table(as1(), r.speed_mps, r.sprung_mass_kg, r.impact_factor, target.settings().lattice, on);
-              near << " " << marginal.log_likelihood(t, terms) << " (sigma_hat " << t.fit.sigma_hat << ", z " << t.fit.lateral_m << ")";
+              const model::TruckTable t = model::build_truck_table(
+                  as1(), r.speed_mps, r.sprung_mass_kg, r.impact_factor, target.settings().lattice, on);
+              near << " " << marginal.log_likelihood(t, terms) << " (sigma_hat " << t.fit.sigma_hat << ", z "
+                   << t.fit.lateral_m << ")";
             }
             WARN(near.str());
           }
@@ -200,8 +207,8 @@ TEST_CASE("the psi window's interpolated likelihood matches tables built at psi 
         CHECK(sum_abs / 8.0 < 1e-3);
         worst_mean = std::max(worst_mean, sum_abs / 8.0);
       }
-      WARN(name << ": window [" << grid->lo() << ", " << grid->hi() << "], largest |interpolated - direct| " << worst
-                << " nats per truck, largest mean over the 8 trucks at one psi " << worst_mean);
+      WARN(name << ": window [" << grid->lo() << ", " << grid->hi() << "], largest |interpolated - direct| "
+                << worst << " nats per truck, largest mean over the 8 trucks at one psi " << worst_mean);
       // The target's density is the interpolant summed, and a ψ inside the box but outside the
       // window has density 0.
       const double inside = 0.5 * (grid->lo() + grid->hi());
@@ -216,8 +223,9 @@ TEST_CASE("the psi window's interpolated likelihood matches tables built at psi 
       const double prior = target.log_posterior(theta, &inside) - sum;
       CHECK(std::isfinite(prior));
       CHECK(lp - prior == Approx(sum).margin(1e-6));
-      const double outside = grid->lo() > ext->parameters()[0].lo ? 0.5 * (grid->lo() + ext->parameters()[0].lo)
-                                                                   : 0.5 * (grid->hi() + ext->parameters()[0].hi);
+      const double outside = grid->lo() > ext->parameters()[0].lo
+                                 ? 0.5 * (grid->lo() + ext->parameters()[0].lo)
+                                 : 0.5 * (grid->hi() + ext->parameters()[0].hi);
       CHECK(target.log_posterior(theta, &outside) == -std::numeric_limits<double>::infinity());
     }
   }
@@ -247,7 +255,8 @@ TEST_CASE("a fit with an effect in a psi window resumes bit-identically, with 1 
   // Another effect's run refuses the state, naming both models.
   const auto other = fleet::make_extension("tyre_damping", as1());
   fleet::MarginalSmc wrong(as1(), options(128, 4, 2, other.get()));
-  CHECK_THROWS_WITH(restore_from(wrong, saved), Catch::Contains("unsprung_mass") && Catch::Contains("tyre_damping"));
+  CHECK_THROWS_WITH(restore_from(wrong, saved),
+                    Catch::Contains("unsprung_mass") && Catch::Contains("tyre_damping"));
 }
 
 // MPI: truck i's Q tables live on rank i % R together (threads stand in for ranks here).
@@ -276,7 +285,8 @@ TEST_CASE("a fit with an effect in a psi window split over 2 ranks has the bits 
     fleet::MarginalSmc split(as1(), opts(&r));
     run(split);
     std::lock_guard lock(m);
-    same[r.rank()] = split.target().theta() == one.target().theta() && split.target().psi() == one.target().psi();
+    same[r.rank()] =
+        split.target().theta() == one.target().theta() && split.target().psi() == one.target().psi();
     local[r.rank()] = split.target().node_tables().back().trucks();
   });
   CHECK(same[0]);
@@ -285,7 +295,8 @@ TEST_CASE("a fit with an effect in a psi window split over 2 ranks has the bits 
   CHECK(local[1] == 8);
 }
 
-TEST_CASE("sensor_gain on the marginal core is a usage error naming it and the latent core", "[marginal][extension]") {
+TEST_CASE("sensor_gain on the marginal core is a usage error naming it and the latent core",
+          "[marginal][extension]") {
   const auto ext = fleet::make_extension("sensor_gain", as1());
   fleet::OnlineFitOptions o;
   o.core = fleet::OnlineFitOptions::Core::kMarginal;
@@ -327,8 +338,8 @@ TEST_CASE("the marginal core and the batch MCMC agree on each dynamic effect's p
         states.push_back(state);
         weights.push_back(cloud.weights);
         const model::PsiGrid* g = smc.target().psi_grid();
-        windows << " [" << g->lo() << ", " << g->hi() << "] Q " << g->size() << ", " << smc.target().rebuilds()
-                << " rebuilds;";
+        windows << " [" << g->lo() << ", " << g->hi() << "] Q " << g->size() << ", "
+                << smc.target().rebuilds() << " rebuilds;";
       }
       const double smc_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       fleet::BatchMcmcOptions o;
@@ -361,8 +372,9 @@ TEST_CASE("the marginal core and the batch MCMC agree on each dynamic effect's p
         spread[j] = std::sqrt(s2) / sd;
         pooled += spread[j] * spread[j];
         offset[j] = (m - mean) / sd;
-        report << "  " << names[static_cast<std::size_t>(j)] << ": SMC " << m << ", MCMC " << mean << " (sd " << sd
-               << "), offset " << offset[j] << " sd, MCMC ESS " << ess << ", SMC run-to-run sd " << spread[j] << " sd\n";
+        report << "  " << names[static_cast<std::size_t>(j)] << ": SMC " << m << ", MCMC " << mean << " (sd "
+               << sd << "), offset " << offset[j] << " sd, MCMC ESS " << ess << ", SMC run-to-run sd "
+               << spread[j] << " sd\n";
       }
       const double smc_se = std::sqrt(pooled / static_cast<double>(J) / static_cast<double>(kSmcRuns));
       report << "  SMC se " << smc_se << " sd\n";

@@ -37,7 +37,8 @@ int psi_window_nodes(const PsiWindowSettings& s, const model::PsiWindow& w, doub
 
 model::PsiGrid psi_window_grid(const model::PsiWindow& w, int nodes, double box_lo, double box_hi) {
   const bool box = w.lo <= box_lo && w.hi >= box_hi;
-  return model::PsiGrid(w.lo, w.hi, nodes, box ? model::PsiGrid::Kind::kLinear : model::PsiGrid::Kind::kChebyshev);
+  return model::PsiGrid(w.lo, w.hi, nodes,
+                        box ? model::PsiGrid::Kind::kLinear : model::PsiGrid::Kind::kChebyshev);
 }
 
 PsiMoments psi_moments(const Eigen::MatrixXd& psi, const Eigen::ArrayXd& W, double box_lo, double box_hi) {
@@ -47,11 +48,13 @@ PsiMoments psi_moments(const Eigen::MatrixXd& psi, const Eigen::ArrayXd& W, doub
   return {mean, std::max(std::sqrt(std::max(var, 0.0)), 1e-9 * (box_hi - box_lo))};
 }
 
-double interpolate_node_sums(const model::PsiGrid& grid, double psi, const double* values, std::size_t stride) {
+double interpolate_node_sums(const model::PsiGrid& grid, double psi, const double* values,
+                             std::size_t stride) {
   return interpolate(grid, psi, [&](std::size_t q) { return values[q * stride]; });
 }
 
-double interpolate_node_sums(const model::PsiGrid& grid, double psi, const util::ExactSum* sums, std::size_t stride) {
+double interpolate_node_sums(const model::PsiGrid& grid, double psi, const util::ExactSum* sums,
+                             std::size_t stride) {
   return interpolate(grid, psi, [&](std::size_t q) { return sums[q * stride].value(); });
 }
 

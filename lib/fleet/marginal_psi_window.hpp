@@ -13,9 +13,9 @@
 // the window is the box, with box_nodes evenly spaced nodes and the piecewise-linear interpolant
 // (one truck's ℓ_i(ψ) across the whole box is far from a polynomial); then the posterior mean ± 6
 // posterior sd, clipped to the box, with rule.nodes Chebyshev nodes (the prototype's record measured
-// Q = 5 on ±6 sd at ≤ 0.038 nats summed over the trucks from n = 20 to 10,000). A ψ inside the box but outside the window has
-// density 0 (-inf): the interpolant extrapolates badly there, and the window holds ±6 sd of the
-// posterior (a mass of 2e-9 outside for a normal) and is moved, with every table rebuilt, as soon
+// Q = 5 on ±6 sd at ≤ 0.038 nats summed over the trucks from n = 20 to 10,000). A ψ inside the box but
+// outside the window has density 0 (-inf): the interpolant extrapolates badly there, and the window holds ±6
+// sd of the posterior (a mass of 2e-9 outside for a normal) and is moved, with every table rebuilt, as soon
 // as mean ± 4 sd leaves it (check_psi_window's kMoved), so the truncation never binds on more than
 // the far tail.
 #pragma once
@@ -63,7 +63,9 @@ PsiMoments psi_moments(const Eigen::MatrixXd& psi, const Eigen::ArrayXd& W, doub
 
 // Σ_q L_q(ψ) values[q * stride] on a grid: -inf outside the window, or where a node's value
 // with a non-zero weight is -inf or NaN (a node sum at a θ no table supports).
-double interpolate_node_sums(const model::PsiGrid& grid, double psi, const double* values, std::size_t stride);
-double interpolate_node_sums(const model::PsiGrid& grid, double psi, const util::ExactSum* sums, std::size_t stride);
+double interpolate_node_sums(const model::PsiGrid& grid, double psi, const double* values,
+                             std::size_t stride);
+double interpolate_node_sums(const model::PsiGrid& grid, double psi, const util::ExactSum* sums,
+                             std::size_t stride);
 
 }  // namespace ssrfleet::fleet
