@@ -82,11 +82,11 @@ fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t 
     throw UsageError("--core must be marginal or latent, not '" + flags.core + "'");
   }
   if (extension != nullptr) {
-    // The marginal core's tables hold the base model's forward model: it carries an effect that
-    // changes the fleet's stiffness distribution alone; the others ride in the latent core's particles.
+    // The marginal core carries the base model, stiffness mixtures and one-parameter effects inside
+    // the dynamics (OnlineFitOptions::marginal_carries); the others ride in the latent core's particles.
     if (flags.core_given && flags.core == "marginal" && !fleet::OnlineFitOptions::marginal_carries(extension)) {
-      throw UsageError("--model " + extension->name() + ": the marginal core's tables hold the base model's forward "
-                       "model, which this effect changes; fit it with --core latent (the default for it) or --method mcmc");
+      throw UsageError("--model " + extension->name() + ": " + fleet::OnlineFitOptions::marginal_refusal(*extension) +
+                       ", or --method mcmc");
     }
     if (!flags.core_given) o.core = fleet::OnlineFitOptions::default_core(extension);
     o.extension = extension;

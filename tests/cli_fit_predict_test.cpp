@@ -175,9 +175,9 @@ TEST_CASE("fit --model refuses a bad spec or the marginal core, listing the cata
   CHECK(bad.status != 0);
   CHECK(bad.err.find("sensor_gain.sensor = '17' must be a number in [0.5, 16.5]") != std::string::npos);
   CHECK(bad.err.find("  tyre_damping: ") != std::string::npos);  // the catalogue
-  const auto marginal = run_ssrfleet("fit " + q(log) + " --model tyre_damping --core marginal --out " + q(out), dir);
+  const auto marginal = run_ssrfleet("fit " + q(log) + " --model sensor_gain --core marginal --out " + q(out), dir);
   CHECK(marginal.status != 0);
-  CHECK(marginal.err.find("the marginal core's tables hold the base model's forward model") != std::string::npos);
+  CHECK(marginal.err.find("'sensor_gain' is not carried by the marginal core") != std::string::npos);
   CHECK(marginal.err.find("--core latent") != std::string::npos);
   CHECK(!std::filesystem::exists(out));
 }

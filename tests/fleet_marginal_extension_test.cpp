@@ -149,16 +149,20 @@ TEST_CASE("second_class fits on the marginal core: psi in the cloud, a bit-ident
   CHECK_THROWS_WITH(restore_from(base, saved), Catch::Contains("second_class") && Catch::Contains("base"));
 }
 
-TEST_CASE("the marginal core refuses an effect that changes the forward model, naming the latent core",
+TEST_CASE("the marginal core refuses an effect it does not carry, naming it and the latent core",
           "[marginal][extension]") {
-  const auto ext = fleet::make_extension("tyre_damping", as1());
-  CHECK_THROWS_AS(fleet::MarginalSmc(as1(), options(64, 1, ext.get())), UsageError);
-  fleet::OnlineFitOptions o;
-  o.extension = ext.get();
-  CHECK_THROWS_WITH(fleet::make_online_fit(as1(), o), Catch::Contains("latent"));
-  CHECK(fleet::OnlineFitOptions::default_core(ext.get()) == fleet::OnlineFitOptions::Core::kLatent);
-  const auto second = fleet::make_extension("second_class", as1());
-  CHECK(fleet::OnlineFitOptions::default_core(second.get()) == fleet::OnlineFitOptions::Core::kMarginal);
+  for (const std::string name : {"sensor_gain", "profile_defect"}) {
+    const auto ext = fleet::make_extension(name, as1());
+    CHECK_THROWS_AS(fleet::MarginalSmc(as1(), options(64, 1, ext.get())), UsageError);
+    fleet::OnlineFitOptions o;
+    o.extension = ext.get();
+    CHECK_THROWS_WITH(fleet::make_online_fit(as1(), o), Catch::Contains("latent") && Catch::Contains("'" + name + "'"));
+    CHECK(fleet::OnlineFitOptions::default_core(ext.get()) == fleet::OnlineFitOptions::Core::kLatent);
+  }
+  for (const std::string name : {"second_class", "tyre_damping", "unsprung_mass", "suspension_damping", "speed_bias"}) {
+    const auto ext = fleet::make_extension(name, as1());
+    CHECK(fleet::OnlineFitOptions::default_core(ext.get()) == fleet::OnlineFitOptions::Core::kMarginal);
+  }
   CHECK(fleet::OnlineFitOptions::default_core(nullptr) == fleet::OnlineFitOptions::Core::kMarginal);
 }
 

@@ -147,8 +147,8 @@ TEST_CASE("tables prebuilt one truck per thread give the bits of tables built on
   CHECK(resumed.target().integrator_passes() == replayed->target().integrator_passes());
 }
 
-TEST_CASE("a marginal target of format 1 (before frozen table options), 2 (before sites), 3 (before models) or 4 "
-          "(before the z-moment slopes) is migrated and resumes as its tables were built",
+TEST_CASE("a marginal target of format 1 (before frozen table options), 2 (before sites), 3 (before models), 4 "
+          "(before the z-moment slopes) or 5 (before the psi window) is migrated and resumes as its tables were built",
           "[marginal]") {
   Case c(20, 3);
   fleet::MarginalSmc straight(c.site, options(64, 2, 4));
@@ -163,7 +163,7 @@ TEST_CASE("a marginal target of format 1 (before frozen table options), 2 (befor
   REQUIRE(at != std::string::npos);
   std::uint32_t version = 0;
   std::memcpy(&version, current.data() + at + 8, sizeof version);
-  REQUIRE(version == 5);
+  REQUIRE(version == 6);
   // The record ends with the table's two slope fields (a float per entry each), then the seal.
   const std::size_t entries = first.target().tables().view(0).nodes;
   REQUIRE(entries > 0);
@@ -188,6 +188,29 @@ TEST_CASE("a marginal target of format 1 (before frozen table options), 2 (befor
   const std::string want = bytes_of(expected);
   CHECK(want != bytes_of(straight));  // the slopes change the likelihood: the check below can fail
 
+  // Format 5's bytes are format 6's without the ψ window's flag (0: none, the base model), the byte
+  // after the truck count that ends the fixed-size part: the base model's name and ψ (zeros, 0 rows,
+  // 64 columns), then the count (1). A base-model state of format 5 resumes bit for bit as this
+  // build's, its truck records read as they are.
+  std::string model_and_count(16, '\0');
+  for (const std::int64_t v : {std::int64_t{64}, std::int64_t{1}})
+    model_and_count.append(reinterpret_cast<const char*>(&v), sizeof v);
+  const std::size_t window_flag = current.find(model_and_count, at) + model_and_count.size();
+  REQUIRE(window_flag >= model_and_count.size());
+  REQUIRE(current[window_flag] == 0);
+  std::string v5 = current;
+  v5.erase(window_flag, 1);
+  const std::uint32_t five = 5;
+  std::memcpy(v5.data() + at + 8, &five, sizeof five);
+  reseal(v5);
+  {
+    fleet::MarginalSmc resumed(c.site, options(64, 2, 4));
+    restore_from(resumed, v5);
+    CHECK_FALSE(resumed.target().read_old_truck_records());
+    for (std::size_t t = 1; t < c.log.records.size(); ++t) resumed.absorb(c.log.records[t]);
+    CHECK(bytes_of(resumed) == bytes_of(straight));
+  }
+
   for (const std::uint32_t old_version : {1u, 2u, 3u, 4u}) {
     INFO("format " << old_version);
     // Format 4's bytes are format 5's without the slopes; format 3's are format 4's without the
@@ -195,8 +218,8 @@ TEST_CASE("a marginal target of format 1 (before frozen table options), 2 (befor
     // before the truck count; format 2's are format 3's with no site index (4 bytes: 0) at the
     // start of the truck record, right after the truck's id; format 1's are format 2's without the
     // flag byte (0: none frozen) after the pass count. Edited from the end, so the earlier offsets hold.
-    std::string bytes = current;
-    bytes.erase(slopes_at, slope_bytes);
+    std::string bytes = v5;
+    bytes.erase(slopes_at - 1, slope_bytes);  // v5 is a byte shorter than current before the slopes
     // magic, version, lattice, σ_ref, two absent populations' flags, last rebuild, rebuilds, passes.
     const std::size_t flag = at + 8 + 4 + sizeof(model::Lattice) + 8 + 1 + 1 + 8 + 4 + 8;
     REQUIRE(bytes[flag] == 0);

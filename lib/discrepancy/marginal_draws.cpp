@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "model/extended_forward.hpp"
 #include "model/extension_conditionals.hpp"
 #include "model/fleet_model.hpp"
 #include "model/table_proposal.hpp"
@@ -101,7 +102,17 @@ TruckLatentDraws draw_truck_latents(const site::Site& site, const fleet::Margina
       batch.tyre_stiffness_npm[i] = run.tyre_stiffness_npm;
       batch.lateral_m[i] = run.lateral_m;
     }
-    site.impact_factors(batch, g);
+    if (extension != nullptr && extension->edits_forward()) {
+      // An effect inside the dynamics (the marginal core's ψ window): the extended forward model at ψ.
+      std::vector<fleet::ExtendedPass> passes(static_cast<std::size_t>(n));
+      for (Eigen::Index i = 0; i < n; ++i)
+        passes[static_cast<std::size_t>(i)] = {fleet::base_pass(site, batch.speed_mps[i], batch.sprung_mass_kg[i], batch.stiffness_npm[i],
+                                                                batch.tyre_stiffness_npm[i], batch.lateral_m[i]),
+                                               psi};
+      fleet::simulate_passes(site, extension, passes, g);
+    } else {
+      site.impact_factors(batch, g);
+    }
     for (Eigen::Index i = 0; i < n; ++i) {
       const auto t = static_cast<std::size_t>(i);
       if (step > 0) ++proposals;

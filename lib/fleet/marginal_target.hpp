@@ -34,7 +34,9 @@
 #include "model/fleet_model.hpp"
 #include "util/binary_io.hpp"
 #include "model/fleet_marginal.hpp"
+#include "fleet/marginal_psi_window.hpp"
 #include "model/model_extension.hpp"
+#include "model/psi_grid.hpp"
 #include "model/table_store.hpp"
 #include "model/truck_table.hpp"
 #include "site/site.hpp"
@@ -85,6 +87,10 @@ class MarginalTarget final : public smc::TemperedModel {
     double too_coarse = 1.25, too_fine = 0.8;
     // Rebuilds at most at n >= rebuild_growth × (n at the last rebuild): O(1) cost per truck.
     double rebuild_growth = 1.5;
+    // A ψ window the posterior has moved out of (marginal_psi_window.hpp) is rebuilt sooner, at
+    // n >= psi_moved_growth × (n at the last rebuild): at most 1 / (psi_moved_growth - 1) tables per
+    // truck and node amortised in the worst case.
+    double psi_moved_growth = 1.1;
     // A table cuts a node's broad z-likelihood into pieces no broader (in sd) than this fraction of
     // σ_z's posterior 10 % quantile, within [min_piece_sd_m, table.max_piece_sd_m]: the moment
     // matching of the lateral prior then errs by well under 1e-3 nats per truck (model/truck_table.hpp,
@@ -114,17 +120,24 @@ class MarginalTarget final : public smc::TemperedModel {
     // trucks grow (a stream puts them in its state directory). The same bits either way.
     std::string table_spill_directory;
     // A model extension fitted alongside θ (not owned; outlives the target), or null for the base
-    // model. Its parameters ψ join each particle (the moves see (θ, ψ) as one block). The tables
-    // hold the base model's forward model, so only an extension that changes the fleet's
-    // stiffness distribution alone fits here (ModelExtension::edits_forward() false): its mixture
-    // reweights the lattice's nodes exactly (FleetMarginal::prepare). UsageError for any other.
+    // model. Its parameters ψ join each particle (the moves see (θ, ψ) as one block). Two kinds fit
+    // here: one that changes the fleet's stiffness distribution alone (edits_forward() false), whose
+    // mixture reweights the lattice's nodes exactly (FleetMarginal::prepare); and a one-parameter
+    // effect inside the dynamics (carried_by_psi_window()), whose ψ is interpolated between tables at
+    // the nodes of a window that follows its posterior (marginal_psi_window.hpp). UsageError for any
+    // other (a discrete choice, an added profile, several effects): those need the latent core.
     const ModelExtension* extension = nullptr;
+    // The ψ window of an effect inside the dynamics: its nodes and how it follows the posterior.
+    PsiWindowSettings psi_window;
   };
 
   struct TableSettings {
     model::Lattice lattice;
     double sigma_ref = 0.0;
     std::optional<model::TruckTableOptions::Population> population;
+    // With an effect carried by a ψ window: the window (in ψ) and its number of nodes Q.
+    std::optional<model::PsiWindow> window;
+    int window_nodes = 0;
   };
 
   MarginalTarget(const site::Site& site, Options options) : MarginalTarget(std::vector<const site::Site*>{&site}, std::move(options)) {}
@@ -169,8 +182,13 @@ class MarginalTarget final : public smc::TemperedModel {
   const Eigen::MatrixXd& psi() const { return psi_; }      // the extension's ψ, dim x P (0 rows without)
   const ModelExtension* extension() const { return options_.extension; }
   const TableSettings& settings() const { return settings_; }
-  // The tables of this rank's trucks, in truck order (every truck's with one rank).
-  const model::TableStore& tables() const { return store_; }
+  // The tables of this rank's trucks, in truck order (every truck's with one rank): with a ψ window,
+  // those at its middle node (a proposal near the posterior for latent draws; the likelihood
+  // interpolates over every node's, node_tables()).
+  const model::TableStore& tables() const { return stores_[stores_.size() / 2]; }
+  const std::vector<model::TableStore>& node_tables() const { return stores_; }
+  // The ψ window's nodes (null without one).
+  const model::PsiGrid* psi_grid() const { return grid_ ? &*grid_ : nullptr; }
   const util::Ranks& ranks() const { return *ranks_; }
   // The tables' own check of their z approximation (TruckTable::lateral_error_nats) over the trucks
   // absorbed by this process since the second, on every rank (not kept in checkpoints: a
@@ -249,16 +267,42 @@ class MarginalTarget final : public smc::TemperedModel {
   void decode(const double* x, HyperVector& theta, double* psi) const;
   double log_jacobian(const HyperVector& theta, const double* psi) const;
   double log_prior_of(const HyperVector& theta, const double* psi) const;
-  // The k indices of the tables in store_ (and newest_), and of old_store_ during a correction:
+  // The k indices of the tables in stores_ (and newest_), and of old_stores_ during a correction:
   // the range terms_for() tabulates an extension's stiffness mixture over.
   void note_k_range(const model::TruckTable& table, int& lo, int& hi) const;
   int k_lo_ = 0, k_hi_ = -1, old_k_lo_ = 0, old_k_hi_ = -1;
   // The table option max_piece_sd_m the cloud implies (Options::lateral_piece_fraction).
   double max_piece_sd(const Eigen::ArrayXd& W) const;
   double log_prior(Eigen::Index p) const { return log_prior_of(theta_of(p), psi_of(p)); }
-  // Σ_i ℓ_i(θ) over every rank's trucks in a store (collective).
-  double sum_loglik(const model::TableStore& store, const model::FleetMarginal& marginal,
-                    const HyperVector& theta, const double* psi) const;
+  // Σ_i ℓ_i(θ, ψ) over every rank's trucks in a set of node stores (collective).
+  double sum_loglik(const std::vector<model::TableStore>& stores, const model::PsiGrid* grid,
+                    const model::FleetMarginal& marginal, const HyperVector& theta, const double* psi) const;
+  // Adds each of `count` particles' Σ_{i<end} ℓ_i at every node of `stores` to out[q * stride + c].
+  static void add_node_sums(const std::vector<model::TableStore>& stores, const model::FleetMarginal& marginal,
+                            std::size_t end, const model::ThetaTerms* terms, std::size_t count, util::ExactSum* out,
+                            std::size_t stride);
+  // Σ over the nodes of a truck's or a sum's values at ψ (the only value without a window).
+  double combine(const model::PsiGrid* grid, const double* psi, const util::ExactSum* sums, std::size_t stride) const {
+    return grid == nullptr ? sums[0].value() : interpolate_node_sums(*grid, psi[0], sums, stride);
+  }
+  // A truck's tables at every node of settings' window (one table, the base model's, without one),
+  // each node's fit made under its ψ; `fit` is the truck's fit without a window (reused), and with
+  // one it receives the middle node's. Serial: callers parallelise over trucks.
+  std::vector<model::TruckTable> build_tables(std::uint32_t site, double speed_mps, double sprung_mass_kg,
+                                              const Eigen::VectorXd& impact_factors, const TableSettings& settings,
+                                              const model::TruckTableOptions& options, model::TruckFit& fit,
+                                              bool fit_given) const;
+  // The window settings imply ([lo, hi] and Q); stores and grid sized to it.
+  void set_window(const model::PsiWindow& window);
+  std::vector<model::TableStore> empty_stores() const;
+  // The prior box of ψ (the carried effect's one parameter).
+  double box_lo() const { return options_.extension->parameters()[0].lo; }
+  double box_hi() const { return options_.extension->parameters()[0].hi; }
+  bool windowed() const { return grid_.has_value(); }
+  // Whether the ψ window must be rebuilt now (check_psi_window and the rebuilds' spacing), and why.
+  bool window_due(const Eigen::ArrayXd& W, std::string* why) const;
+  // The newest truck's ℓ at (θ, ψ) from its tables in newest_.
+  double newest_loglik(const model::ThetaTerms& terms, const double* psi) const;
   // The fleet's stiffness distribution per particle, as the tables' settings need it: its mean and
   // sd (the predictive that decides which nodes a table keeps), and the narrowest sd among its
   // components that carry at least kResolvedComponentWeight of the trucks (what the lattice must
@@ -289,18 +333,21 @@ class MarginalTarget final : public smc::TemperedModel {
   double lateral_error_abs_sum_ = 0.0;
   TableSettings settings_;
   model::FleetMarginal marginal_;
-  model::TableStore store_;
-  // The newest truck's table, on every rank (its rank sends it): in a truck stage each rank computes
-  // that truck's ℓ for its slice of the particles (util::Ranks::slice), so the stage's one serial
-  // piece of work is shared too.
-  model::TableStore newest_;
-  // During a correction stage: the tables and settings being replaced.
-  std::optional<model::TableStore> old_store_;
+  // One store per node of the ψ window (one without a window), each with every truck of this rank.
+  std::vector<model::TableStore> stores_;
+  std::optional<model::PsiGrid> grid_;
+  // The newest truck's tables, on every rank (its rank sends them): in a truck stage each rank
+  // computes that truck's ℓ for its slice of the particles (util::Ranks::slice), so the stage's one
+  // serial piece of work is shared too.
+  std::vector<model::TableStore> newest_;
+  // During a correction stage: the tables, window and settings being replaced.
+  std::optional<std::vector<model::TableStore>> old_stores_;
+  std::optional<model::PsiGrid> old_grid_;
   std::optional<model::FleetMarginal> old_marginal_;
   Mode mode_ = Mode::kIdle;
 
   // Every truck's data and fit, on every rank (the lattice follows the fits' widths; a rebuild
-  // reads the data of the rank's own trucks); the tables in store_ are this rank's trucks' only.
+  // reads the data of the rank's own trucks); the tables in stores_ are this rank's trucks' only.
   AbsorbedTrucks absorbed_;
   // Σ_i log of each fit's likelihood sd per unit σ (k and k_t), in truck order: the geometric mean
   // that sets the lattice spacing, kept as it grows so the per-truck settings cost O(1), not O(n).
@@ -331,7 +378,7 @@ class MarginalTarget final : public smc::TemperedModel {
     std::uint64_t freeze_id = 0;
     std::uint32_t site = 0;
     model::TruckFit fit;
-    model::TruckTable table;
+    std::vector<model::TruckTable> tables;  // one per node
   };
   std::vector<Prebuilt> prebuilt_;  // this rank's trucks of the span [prebuilt_from_, prebuilt_until_)
   std::int64_t prebuilt_from_ = 0, prebuilt_until_ = 0;

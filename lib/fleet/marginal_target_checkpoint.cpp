@@ -3,6 +3,7 @@
 #include "fleet/marginal_target.hpp"
 
 #include <string>
+#include <type_traits>
 
 #include "util/errors.hpp"
 
@@ -19,7 +20,53 @@ constexpr std::uint64_t kMagic = 0x4e52414d46525353ULL;  // "SSRFMARN"
 // Version 5 adds each table entry's z-moment slopes in u (model/truck_table.hpp). A table of an older
 // state has none: it is read with slopes of 0, its moments fixed as it was built and evaluated (the
 // likelihood the build that wrote it evaluated), until the next rebuild gives every table its slopes.
-constexpr std::uint32_t kVersion = 5;
+// Version 6 adds the ψ window of an effect carried by one (its [lo, hi] and node count, after the
+// settings) and, for such an effect, the window's Q tables in each truck record instead of one. A
+// state without a window writes exactly version 5's records, so a base-model or second_class
+// state of version 1-5 resumes as before; an effect carried by a window has no older state.
+constexpr std::uint32_t kVersion = 6;
+
+// One table: its node count, u_ref and the nine fields.
+void write_table(BinaryWriter& out, const model::TableView& v) {
+  out.value<std::uint32_t>(static_cast<std::uint32_t>(v.nodes));
+  out.value(v.u_ref);
+  auto write = [&](const auto* p) {
+    for (std::size_t g = 0; g < v.nodes; ++g) out.value(p[g]);
+  };
+  write(v.k_index);
+  write(v.kt_index);
+  write(v.c);
+  write(v.m);
+  write(v.b);
+  write(v.z_mean_m);
+  write(v.z_var_m2);
+  write(v.z_mean_slope_m);
+  write(v.z_var_slope_m2);
+}
+
+model::TruckTable read_table(BinaryReader& in, std::uint32_t version) {
+  model::TruckTable t;
+  const auto nodes = in.value<std::uint32_t>("table nodes");
+  if (nodes > 1'000'000) in.fail("table nodes", "implausible node count " + std::to_string(nodes));
+  t.u_ref = in.value<double>("table u_ref");
+  auto read = [&](auto& v, const char* what) {
+    v.resize(nodes);
+    for (auto& x : v) x = in.value<std::remove_reference_t<decltype(x)>>(what);
+  };
+  read(t.k_index, "table k index");
+  read(t.kt_index, "table kt index");
+  read(t.c, "table c");
+  read(t.m, "table m");
+  read(t.b, "table b");
+  read(t.z_mean_m, "table z mean");
+  read(t.z_var_m2, "table z var");
+  if (version >= 5) {
+    read(t.z_mean_slope_m, "table z mean slope");
+    read(t.z_var_slope_m2, "table z var slope");
+  }
+  if (!(t.u_ref > 0.0)) in.fail("truck", "a truck record holds impossible values");
+  return t;
+}
 
 }  // namespace
 
@@ -66,6 +113,13 @@ void MarginalTarget::save_particles(BinaryWriter& out) const {
   out.text(options_.extension != nullptr ? options_.extension->name() : std::string());
   out.matrix(psi_);
   out.value<std::uint64_t>(absorbed_.size());
+  // Last, so that the parts before are version 5's.
+  out.value<std::uint8_t>(settings_.window ? 1 : 0);
+  if (settings_.window) {
+    out.value(settings_.window->lo);
+    out.value(settings_.window->hi);
+    out.value<std::int32_t>(settings_.window_nodes);
+  }
 }
 
 // A truck's fit is written as its bytes: it must have no padding, whose bytes are indeterminate.
@@ -81,21 +135,7 @@ void MarginalTarget::save_trucks(BinaryWriter& out, std::size_t begin, std::size
     out.value(absorbed_.sprung_mass_kg(i));
     out.matrix(absorbed_.impact_factors(i));
     out.value(absorbed_.fit(i));
-    const model::TableView v = store_.view(i / static_cast<std::size_t>(ranks_->size()));
-    out.value<std::uint32_t>(static_cast<std::uint32_t>(v.nodes));
-    out.value(v.u_ref);
-    auto write = [&](const auto* p) {
-      for (std::size_t g = 0; g < v.nodes; ++g) out.value(p[g]);
-    };
-    write(v.k_index);
-    write(v.kt_index);
-    write(v.c);
-    write(v.m);
-    write(v.b);
-    write(v.z_mean_m);
-    write(v.z_var_m2);
-    write(v.z_mean_slope_m);
-    write(v.z_var_slope_m2);
+    for (const model::TableStore& store : stores_) write_table(out, store.view(i / static_cast<std::size_t>(ranks_->size())));
   }
 }
 
@@ -153,6 +193,24 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   inc_ = Eigen::ArrayXd::Zero(options_.particles);
   const auto n = in.value<std::uint64_t>("trucks");
   if (n > 100'000'000ULL) in.fail("trucks", "implausible truck count " + std::to_string(n));
+  const bool carried = carried_by_psi_window(options_.extension);
+  if (carried && version < 6) {
+    in.fail("psi window", "format version " + std::to_string(version) + " holds no psi window, which '" +
+                              options_.extension->name() + "' on the marginal core needs (this build writes version " +
+                              std::to_string(kVersion) + ")");
+  }
+  const bool has_window = version >= 6 && in.value<std::uint8_t>("psi window") != 0;
+  if (has_window != carried) in.fail("psi window", has_window ? "a window this run's model has no use for" : "no window");
+  if (has_window) {
+    const auto lo = in.value<double>("psi window lo");
+    const auto hi = in.value<double>("psi window hi");
+    const auto q = in.value<std::int32_t>("psi window nodes");
+    if (!(lo >= box_lo() && hi <= box_hi() && lo < hi) || q < 2 || q > kMaxPsiNodes)
+      in.fail("psi window", "impossible window or node count");
+    settings_.window = model::PsiWindow{lo, hi};
+    settings_.window_nodes = q;  // as saved (the rule that chose it may differ)
+    grid_.emplace(psi_window_grid(*settings_.window, q, box_lo(), box_hi()));
+  }
   if (frozen_ && (frozen_until_ < static_cast<std::int64_t>(n) ||
                   frozen_until_ > static_cast<std::int64_t>(n) + options_.freeze_max)) {
     in.fail("frozen until", "truck " + std::to_string(frozen_until_) + " is not within a span of truck " +
@@ -161,12 +219,13 @@ std::uint64_t MarginalTarget::load_particles(BinaryReader& in) {
   sum_log_sd_k_ = sum_log_sd_kt_ = 0.0;
   // Nothing is sized by n: it is not checked (its seal comes after the truck records), and up to 1e8
   // it would reserve 2 GB for a state of a few bytes. The store grows as records are read.
-  store_ = model::TableStore(options_.table_spill_directory);
+  stores_ = empty_stores();
   absorbed_ = AbsorbedTrucks(options_.table_spill_directory);
   marginal_ = make_marginal(settings_.lattice);
   loaded_version_ = version;
   mode_ = Mode::kIdle;
-  old_store_.reset();
+  old_stores_.reset();
+  old_grid_.reset();
   old_marginal_.reset();
   k_lo_ = 0;
   k_hi_ = -1;
@@ -185,32 +244,14 @@ void MarginalTarget::load_trucks(BinaryReader& in, std::uint64_t count) {
     const auto mass = in.value<double>("truck mass");
     const Eigen::VectorXd impact_factors = in.matrix("impact factors", site_of(site).sensors(), 1);
     const auto fit = in.value<model::TruckFit>("truck fit");
-    model::TruckTable t;
-    const auto nodes = in.value<std::uint32_t>("table nodes");
-    if (nodes > 1'000'000) in.fail("table nodes", "implausible node count " + std::to_string(nodes));
-    t.u_ref = in.value<double>("table u_ref");
-    auto read = [&](auto& v, const char* what) {
-      v.resize(nodes);
-      for (auto& x : v) x = in.value<std::remove_reference_t<decltype(x)>>(what);
-    };
-    read(t.k_index, "table k index");
-    read(t.kt_index, "table kt index");
-    read(t.c, "table c");
-    read(t.m, "table m");
-    read(t.b, "table b");
-    read(t.z_mean_m, "table z mean");
-    read(t.z_var_m2, "table z var");
-    if (loaded_version_ >= 5) {
-      read(t.z_mean_slope_m, "table z mean slope");
-      read(t.z_var_slope_m2, "table z var slope");
-    }
-    if (!(t.u_ref > 0.0) || !std::isfinite(speed) || !std::isfinite(mass)) {
-      in.fail("truck", "a truck record holds impossible values");
+    if (!std::isfinite(speed) || !std::isfinite(mass)) in.fail("truck", "a truck record holds impossible values");
+    for (model::TableStore& store : stores_) {
+      const model::TruckTable t = read_table(in, loaded_version_);
+      note_k_range(t, k_lo_, k_hi_);
+      if (ranks_->owns(truck)) store.append(t, site);  // another rank's table is read past
     }
     absorbed_.push_back(speed, mass, site, impact_factors, fit);
     add_to_width_sums(fit);
-    note_k_range(t, k_lo_, k_hi_);
-    if (ranks_->owns(truck)) store_.append(t, site);  // another rank's table is read past
   }
 }
 

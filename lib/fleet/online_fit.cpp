@@ -74,14 +74,20 @@ std::unique_ptr<OnlineFit> make_online_fit(const site::Site& site, const OnlineF
   return make_online_fit(std::vector<const site::Site*>{&site}, options);
 }
 
+std::string OnlineFitOptions::marginal_refusal(const ModelExtension& extension) {
+  return "model '" + extension.name() + "' is not carried by the marginal core, which fits the base model, second_class "
+         "and the one-parameter effects inside the dynamics (tyre_damping, unsprung_mass, suspension_damping, "
+         "speed_bias); a sensor's gain (a discrete sensor and a gain), a profile defect and compositions of several "
+         "effects are not yet carried: fit it on the latent core (--core latent, the default for this model)";
+}
+
 std::unique_ptr<OnlineFit> make_online_fit(const std::vector<const site::Site*>& sites, const OnlineFitOptions& options) {
   if (sites.empty()) throw UsageError("make_online_fit: no site");
   if (options.core == OnlineFitOptions::Core::kMarginal) {
     std::string why;
     if (!options.marginal.sampler.IsValid(&why)) throw UsageError(why);
     if (!OnlineFitOptions::marginal_carries(options.extension)) {
-      throw UsageError("model '" + options.extension->name() + "' changes the forward model, which the marginal core's "
-                       "tables hold fixed: fit it on the latent core (--core latent, the default for this model)");
+      throw UsageError(OnlineFitOptions::marginal_refusal(*options.extension));
     }
     MarginalSmc::Options marginal = options.marginal;
     marginal.target.extension = options.extension;

@@ -70,12 +70,16 @@ struct OnlineFitOptions {
   // The model extension fitted alongside θ (not owned; outlives the fit), or null for the base
   // model. make_online_fit hands it to the chosen core.
   const ModelExtension* extension = nullptr;
-  // Whether the marginal core carries a model: the base model, and extensions that change the
-  // fleet's stiffness distribution alone (their mixture reweights the tables' nodes exactly); an
-  // effect that changes the forward model needs the latent core.
+  // Whether the marginal core carries a model: the base model, extensions that change the fleet's
+  // stiffness distribution alone (their mixture reweights the tables' nodes exactly), and
+  // one-parameter effects inside the dynamics (tables at the nodes of a ψ window,
+  // marginal_psi_window.hpp). A discrete choice (sensor_gain), an added profile (profile_defect)
+  // and compositions of several effects need the latent core.
   static bool marginal_carries(const ModelExtension* extension) {
-    return extension == nullptr || !extension->edits_forward();
+    return extension == nullptr || !extension->edits_forward() || carried_by_psi_window(extension);
   }
+  // Why the marginal core refuses a model it does not carry (names the latent core).
+  static std::string marginal_refusal(const ModelExtension& extension);
   // The core a model fits on unless the user names one: the marginal core wherever it carries the
   // model (its cost per truck is flat in n), else the latent core.
   static Core default_core(const ModelExtension* extension) {

@@ -9,7 +9,7 @@
 
 namespace ssrfleet::model {
 
-PsiGrid::PsiGrid(double lo, double hi, int nodes) : lo_(lo), hi_(hi) {
+PsiGrid::PsiGrid(double lo, double hi, int nodes, Kind kind) : lo_(lo), hi_(hi), kind_(kind) {
   if (!(lo < hi))
     throw UsageError("psi grid: the interval [" + std::to_string(lo) + ", " + std::to_string(hi) +
                      "] is empty");
@@ -21,6 +21,10 @@ PsiGrid::PsiGrid(double lo, double hi, int nodes) : lo_(lo), hi_(hi) {
     return;
   }
   const int n = nodes - 1;
+  if (kind == Kind::kLinear) {
+    for (int q = 0; q <= n; ++q) nodes_.push_back(q == n ? hi : lo + (hi - lo) * q / n);
+    return;
+  }
   for (int q = 0; q <= n; ++q) {
     // The ends exactly (cos(0), cos(π) rounded would miss them by an ulp); the middle node of an
     // odd Q exactly at the midpoint, so the grid is symmetric.
@@ -42,6 +46,17 @@ PsiGrid::PsiGrid(double lo, double hi, int nodes) : lo_(lo), hi_(hi) {
 
 void PsiGrid::weights(double psi, double* out) const {
   const std::size_t q = nodes_.size();
+  if (kind_ == Kind::kLinear && q >= 2) {
+    // The hat functions: the two nodes either side of ψ (clamped to the ends outside [lo, hi]).
+    std::fill(out, out + q, 0.0);
+    const double x = std::clamp(psi, lo_, hi_);
+    std::size_t j = std::upper_bound(nodes_.begin(), nodes_.end(), x) - nodes_.begin();
+    j = std::clamp<std::size_t>(j, 1, q - 1);
+    const double t = (x - nodes_[j - 1]) / (nodes_[j] - nodes_[j - 1]);
+    out[j - 1] = 1.0 - t;
+    out[j] = t;
+    return;
+  }
   for (std::size_t j = 0; j < q; ++j) {
     if (psi == nodes_[j]) {
       std::fill(out, out + q, 0.0);

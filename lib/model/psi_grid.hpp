@@ -30,17 +30,26 @@
 
 namespace ssrfleet::model {
 
+// Two kinds of grid. kChebyshev: the polynomial through Q Chebyshev points (above), accurate where
+// ℓ_i is smooth over [a, b] (a window of a few posterior sd). kLinear: Q evenly spaced nodes and the
+// piecewise-linear interpolant (L_q the hat function of node q, at most two non-zero), for a range
+// as wide as the prior box, where ℓ_i(ψ) of a single truck can be far from a polynomial (a
+// polynomial through it there swings by nats between nodes) but a chord between neighbouring nodes
+// errs by at most h² max|ℓ''| / 8, h the spacing: a fraction of a nat while h is under the
+// posterior sd of ψ.
 class PsiGrid {
  public:
-  // Q nodes on [lo, hi]: Chebyshev points of the second kind for Q >= 2, the midpoint for Q = 1.
-  // UsageError unless lo < hi and Q >= 1.
-  PsiGrid(double lo, double hi, int nodes);
+  enum class Kind { kChebyshev, kLinear };
+  // Q nodes on [lo, hi]: Chebyshev points of the second kind for Q >= 2, the midpoint for Q = 1;
+  // or (kLinear, Q >= 2) lo + (hi - lo) q / (Q - 1). UsageError unless lo < hi and Q >= 1.
+  PsiGrid(double lo, double hi, int nodes, Kind kind = Kind::kChebyshev);
 
   double lo() const { return lo_; }
   double hi() const { return hi_; }
   int size() const { return static_cast<int>(nodes_.size()); }
   const std::vector<double>& nodes() const { return nodes_; }
   bool contains(double psi) const { return psi >= lo_ && psi <= hi_; }
+  Kind kind() const { return kind_; }
 
   // The Lagrange weights L_q(ψ), q = 0..Q-1, into out[0..Q-1]. At a node, that node's weight is 1
   // and the others 0 exactly.
@@ -51,6 +60,7 @@ class PsiGrid {
 
  private:
   double lo_, hi_;
+  Kind kind_;
   std::vector<double> nodes_, barycentric_;
 };
 

@@ -1,0 +1,61 @@
+#include "fleet/marginal_psi_window.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace ssrfleet::fleet {
+
+namespace {
+constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+
+template <class Value>
+double interpolate(const model::PsiGrid& grid, double psi, const Value& value_at) {
+  if (!grid.contains(psi)) return kNegInf;
+  std::array<double, kMaxPsiNodes> w{};
+  grid.weights(psi, w.data());
+  double s = 0.0;
+  for (int q = 0; q < grid.size(); ++q) {
+    if (w[static_cast<std::size_t>(q)] == 0.0) continue;  // at a node the others' weights are exactly 0
+    const double v = value_at(static_cast<std::size_t>(q));
+    if (!std::isfinite(v)) return kNegInf;
+    s += w[static_cast<std::size_t>(q)] * v;
+  }
+  return s;
+}
+}  // namespace
+
+bool carried_by_psi_window(const ModelExtension* e) {
+  return e != nullptr && e->edits_forward() && e->dim() == 1 && !e->adds_profile() && e->jump_draws() == 0 &&
+         e->stiffness_jump_draws() == 0 && !e->edits_stiffness_distribution();
+}
+
+int psi_window_nodes(const PsiWindowSettings& s, const model::PsiWindow& w, double box_lo, double box_hi) {
+  return w.lo <= box_lo && w.hi >= box_hi ? s.box_nodes : s.rule.nodes;
+}
+
+model::PsiGrid psi_window_grid(const model::PsiWindow& w, int nodes, double box_lo, double box_hi) {
+  const bool box = w.lo <= box_lo && w.hi >= box_hi;
+  return model::PsiGrid(w.lo, w.hi, nodes,
+                        box ? model::PsiGrid::Kind::kLinear : model::PsiGrid::Kind::kChebyshev);
+}
+
+PsiMoments psi_moments(const Eigen::MatrixXd& psi, const Eigen::ArrayXd& W, double box_lo, double box_hi) {
+  const Eigen::ArrayXd x = psi.row(0).transpose().array();
+  const double mean = (W * x).sum() / W.sum();
+  const double var = (W * (x - mean).square()).sum() / W.sum();
+  return {mean, std::max(std::sqrt(std::max(var, 0.0)), 1e-9 * (box_hi - box_lo))};
+}
+
+double interpolate_node_sums(const model::PsiGrid& grid, double psi, const double* values,
+                             std::size_t stride) {
+  return interpolate(grid, psi, [&](std::size_t q) { return values[q * stride]; });
+}
+
+double interpolate_node_sums(const model::PsiGrid& grid, double psi, const util::ExactSum* sums,
+                             std::size_t stride) {
+  return interpolate(grid, psi, [&](std::size_t q) { return sums[q * stride].value(); });
+}
+
+}  // namespace ssrfleet::fleet
