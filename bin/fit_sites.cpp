@@ -120,7 +120,7 @@ void fit_manifest_sites(const JointFitRequest& request, const FitFlags& fit, con
   }
   if (fit.model != "base") {
     throw UsageError("--model " + fit.model + " with --sites: a fit of several sites fits the base model (effects "
-                     "need the latent core, which fits one site); fit a site alone with --site NAME");
+                     "fit one site); fit a site alone with --site NAME");
   }
   const io::SiteManifest manifest = io::read_site_manifest(request.manifest_path);
   std::ostream* progress = request.quiet ? nullptr : &std::cerr;

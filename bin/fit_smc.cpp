@@ -28,8 +28,9 @@ void FitFlags::add_to(po::options_description& desc) {
   smc.add_options()
       ("model", po::value(&model)->value_name("SPEC")->default_value(model),
        "the model to fit: base, or effects joined by '+', each NAME or NAME:param=value,... (a parameter given is "
-       "fixed, one left out is fitted), e.g. tyre_damping+sensor_gain:sensor=11; effects need the latent core or "
-       "--method mcmc (ssrfleet effects lists them)")
+       "fixed, one left out is fitted), e.g. tyre_damping+sensor_gain:sensor=11; second_class and one effect inside the dynamics "
+       "(tyre_damping, unsprung_mass, suspension_damping, speed_bias) fit on the marginal core, the others and "
+       "compositions on the latent core (ssrfleet effects lists them)")
       ("core", po::value(&core)->value_name("CORE")->default_value(core),
        "inference core: marginal (each truck's latents integrated out in a table built on arrival; IBIS over the "
        "7 hyperparameters, cost per truck flat in n) or latent (every truck's latents in every particle; cost per "
@@ -95,14 +96,14 @@ fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t 
   // every truck's latents in every particle and runs on one process.
   const util::Ranks& ranks = process_ranks();
   if (ranks.size() > 1 && o.core != fleet::OnlineFitOptions::Core::kMarginal) {
-    throw UsageError("the latent core (--core latent, --model with effects) runs on one process; only the marginal "
+    throw UsageError("the latent core (--core latent, or a --model it alone carries) runs on one process; only the marginal "
                      "core spreads over MPI ranks: run ssrfleet fit without mpirun");
   }
   o.marginal.target.ranks = &ranks;
   if (!flags.checkpoint_dir.empty()) {
     if (o.core != fleet::OnlineFitOptions::Core::kMarginal) {
       throw UsageError("--checkpoint: checkpoints of a fit are the marginal core's; the latent core (--core latent, "
-                       "--model with effects) fits without them");
+                       "or a --model it alone carries) fits without them");
     }
     if (!(flags.checkpoint_every_s > 0.0)) throw UsageError("--checkpoint-every must be > 0 seconds");
     if (flags.checkpoint_every_trucks < 0) throw UsageError("--checkpoint-every-trucks must be >= 0");

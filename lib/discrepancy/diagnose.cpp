@@ -28,11 +28,11 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // A fitted SMC together with the extension it points at (which must outlive it). Each model runs on
-// the core `fit` chooses for it (OnlineFitOptions::default_core; docs/inference.md): the base model
-// and second_class on the marginal core, whose checks draw every truck's latents from their exact
-// conditional given (θ, ψ) (marginal_draws.hpp); an effect that changes the forward model on the
-// latent core, which carries ψ in its particles and re-simulates every kept truck when ψ moves (the
-// marginal core's tables hold one forward model).
+// the core `fit` chooses for it (OnlineFitOptions::default_core; docs/inference.md): the base model,
+// second_class and the one-parameter effects inside the dynamics on the marginal core, whose checks
+// draw every truck's latents from their exact conditional given (θ, ψ) (marginal_draws.hpp); the
+// others (a sensor gain, a profile defect, a composition of effects) on the latent core, which
+// carries ψ in its particles and re-simulates every kept truck when ψ moves.
 struct Fitted {
   std::unique_ptr<fleet::ModelExtension> extension;
   std::unique_ptr<fleet::OnlineFit> online;

@@ -227,11 +227,10 @@ void MarginalSmc::restore_split(BinaryReader& in, BinaryReader& trucks) {
   read_checkpoint_header(in, kCheckpointVersion, fingerprint_, sampler_.options().seed, [](std::uint32_t v) -> std::string {
     if (v == 1) {
       return "checkpoint format version 1 was written by the latent-variable core of ssrfleet 0.1; this build's "
-             "default core reads version 4: replay the log into a new state directory (or resume it with --window, "
-             "which keeps the latent core)";
+             "default core reads version 4: replay the log into a new state directory";
     }
     if (v == 2) return "checkpoint format version 2 (before checksums): replay the log into a new state directory";
-    if (v == 3) return "checkpoint format version 3 is the latent core's (--window), not the marginal core's (4)";
+    if (v == 3) return "checkpoint format version 3 is the latent core's, not the marginal core's (4)";
     return "unsupported checkpoint format version " + std::to_string(v);
   });
   smc::TemperedSampler::State state;

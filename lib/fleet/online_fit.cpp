@@ -95,7 +95,7 @@ std::unique_ptr<OnlineFit> make_online_fit(const std::vector<const site::Site*>&
   }
   if (sites.size() > 1) {
     throw UsageError("a fit of several sites runs on the marginal core (each truck's table is built through its own "
-                     "site); the latent core (--core latent, --window, --model with effects) fits one site");
+                     "site); the latent core (--core latent, or --model with an effect it alone carries) fits one site");
   }
   std::string why;
   if (!options.latent.sampler.IsValid(&why)) throw UsageError(why);

@@ -5,8 +5,9 @@
 //   marginal (default)  MarginalSmc: IBIS over θ with each truck's latents integrated out in a
 //                       table; cost per truck flat in n (docs/inference.md);
 //   latent              FleetSmc: every truck's latents in every particle, older trucks re-swept
-//                       per truck (cost grows with n); needed for model extensions that change
-//                       the forward model and for the bounded-memory window mode.
+//                       per truck (cost grows with n); needed for the effects the marginal core
+//                       does not carry (marginal_carries: a sensor gain, a profile defect and
+//                       compositions of several effects).
 #pragma once
 
 #include <deque>
