@@ -69,8 +69,8 @@ int run_stream(int argc, const char* const argv[]) {
        "random seed (a whole number; a resume must use the same one)")
       ("model", po::value(&model_text)->value_name("SPEC")->default_value(model_text),
        "the model to fit: base, or effects joined by '+', each NAME or NAME:param=value,... (a parameter given is "
-       "fixed, one left out is fitted); second_class and one effect inside the dynamics run on the default core, "
-       "the others and compositions on the latent core; a resume must use the same model (ssrfleet effects lists "
+       "fixed, one left out is fitted); second_class, tyre_damping, unsprung_mass and suspension_damping run on "
+       "the default core, the others and compositions on the latent core; a resume must use the same model (ssrfleet effects lists "
        "them)")
       ("tables-in-memory", po::bool_switch(&options.tables_in_memory),
        "keep the marginal core's truck tables, the trucks' data and their ids in memory (about 5 KB a truck) instead of "

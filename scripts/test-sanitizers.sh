@@ -4,7 +4,8 @@
 # .ci/run runs it after scripts/test.sh.
 # The sanitizers slow this code 10-20 times, so the tests labelled "heavy" (4 s or more in Release:
 # Monte Carlo checks of a posterior, end-to-end runs of many fits; see tests/CMakeLists.txt) are left
-# out by the test preset asan, as are the "long" ones. The code they drive runs sanitized in the
+# out by the test preset asan, as are the "long" ones and the "timing" ones (a wall-clock deadline,
+# meaningless in a build slowed 10-20 times). The code they drive runs sanitized in the
 # lighter tests, bad input included: light tests refuse damaged checkpoints, histories, posterior
 # files, road files and simulate's input (the fuzz harnesses of fuzz/ go further).
 set -euo pipefail

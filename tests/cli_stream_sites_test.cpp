@@ -362,6 +362,9 @@ TEST_CASE("a stream state written before sites (stream format 4, truck records w
   const std::size_t model_at = bytes.find(model_and_count, target);
   REQUIRE(model_at != std::string::npos);
   bytes.erase(model_at, 24);
+  // Marginal target format 6 added, after the truck count, whether a ψ window follows (0: none).
+  REQUIRE(bytes[model_at + 8] == '\0');
+  bytes.erase(model_at + 8, 1);
   c.write_checkpoint(bytes);
 
   const auto resumed = c.stream(c.state, c.log);

@@ -159,10 +159,15 @@ TEST_CASE("the marginal core refuses an effect it does not carry, naming it and 
     CHECK_THROWS_WITH(fleet::make_online_fit(as1(), o), Catch::Contains("latent") && Catch::Contains("'" + name + "'"));
     CHECK(fleet::OnlineFitOptions::default_core(ext.get()) == fleet::OnlineFitOptions::Core::kLatent);
   }
-  for (const std::string name : {"second_class", "tyre_damping", "unsprung_mass", "suspension_damping", "speed_bias"}) {
+  for (const std::string name : {"second_class", "tyre_damping", "unsprung_mass", "suspension_damping"}) {
     const auto ext = fleet::make_extension(name, as1());
     CHECK(fleet::OnlineFitOptions::default_core(ext.get()) == fleet::OnlineFitOptions::Core::kMarginal);
   }
+  // speed_bias is carried, but its tables are dear: the latent core by default, the marginal one
+  // when asked.
+  const auto speed = fleet::make_extension("speed_bias", as1());
+  CHECK(fleet::OnlineFitOptions::default_core(speed.get()) == fleet::OnlineFitOptions::Core::kLatent);
+  CHECK(fleet::OnlineFitOptions::marginal_carries(speed.get()));
   CHECK(fleet::OnlineFitOptions::default_core(nullptr) == fleet::OnlineFitOptions::Core::kMarginal);
 }
 

@@ -78,7 +78,7 @@ TEST_CASE("a token is only the calling thread's, scopes nest, and an untripped t
   CHECK(util::current_stop_token() == nullptr);
 }
 
-TEST_CASE("an SMC fit stops with Stopped within a second of its token being tripped", "[util][stop]") {
+TEST_CASE("an SMC fit stops with Stopped within a second of its token being tripped", "[util][stop][timing]") {
   const test::SimulatedCase c(400, 3);
   const auto options = smc_options(4096);  // far more than 0.3 s of work on two cores
   bool threw = false;
@@ -97,7 +97,7 @@ TEST_CASE("an SMC fit stops with Stopped within a second of its token being trip
 }
 
 TEST_CASE("batch MCMC chains on threads of their own stop within a second of the caller's token",
-          "[util][stop]") {
+          "[util][stop][timing]") {
   const test::SimulatedCase c(60, 4);
   fleet::BatchMcmcChainsOptions o;
   o.chains = 3;

@@ -29,9 +29,10 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 
 // A fitted SMC together with the extension it points at (which must outlive it). Each model runs on
 // the core `fit` chooses for it (OnlineFitOptions::default_core; docs/inference.md): the base model,
-// second_class and the one-parameter effects inside the dynamics on the marginal core, whose checks
-// draw every truck's latents from their exact conditional given (θ, ψ) (marginal_draws.hpp); the
-// others (a sensor gain, a profile defect, a composition of effects) on the latent core, which
+// second_class and the one-parameter effects inside the dynamics but speed_bias on the marginal
+// core, whose checks draw every truck's latents from their exact conditional given (θ, ψ)
+// (marginal_draws.hpp); the others (a speed bias, a sensor gain, a profile defect, a composition of
+// effects) on the latent core, which
 // carries ψ in its particles and re-simulates every kept truck when ψ moves.
 struct Fitted {
   std::unique_ptr<fleet::ModelExtension> extension;

@@ -31,6 +31,10 @@ bool carried_by_psi_window(const ModelExtension* e) {
          e->stiffness_jump_draws() == 0 && !e->edits_stiffness_distribution();
 }
 
+bool psi_window_by_default(const ModelExtension* e) {
+  return carried_by_psi_window(e) && e->name() != "speed_bias";
+}
+
 int psi_window_nodes(const PsiWindowSettings& s, const model::PsiWindow& w, double box_lo, double box_hi) {
   return w.lo <= box_lo && w.hi >= box_hi ? s.box_nodes : s.rule.nodes;
 }

@@ -82,9 +82,12 @@ struct OnlineFitOptions {
   // Why the marginal core refuses a model it does not carry (names the latent core).
   static std::string marginal_refusal(const ModelExtension& extension);
   // The core a model fits on unless the user names one: the marginal core wherever it carries the
-  // model (its cost per truck is flat in n), else the latent core.
+  // model (its cost per truck is flat in n) at a reasonable cost, else the latent core
+  // (psi_window_by_default says which carried effects are too dear by default).
   static Core default_core(const ModelExtension* extension) {
-    return marginal_carries(extension) ? Core::kMarginal : Core::kLatent;
+    if (!marginal_carries(extension)) return Core::kLatent;
+    const bool windowed = extension != nullptr && carried_by_psi_window(extension);
+    return !windowed || psi_window_by_default(extension) ? Core::kMarginal : Core::kLatent;
   }
   MarginalSmc::Options marginal;
   FleetSmc::Options latent;
