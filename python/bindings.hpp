@@ -6,6 +6,14 @@
 
 namespace ssrfleet::python {
 
+// An option given from Python as options[key]: None or absent leaves the command's default (false).
+template <typename T>
+bool take(const pybind11::dict& options, const char* key, T& value) {
+  if (!options.contains(key) || options[key].is_none()) return false;
+  value = options[key].template cast<T>();
+  return true;
+}
+
 // The exception classes (ssrfleet.Error and its children) and the translation of the library's
 // errors into them (errors.cpp).
 void bind_errors(pybind11::module_& m);

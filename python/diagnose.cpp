@@ -30,13 +30,6 @@ namespace ssrfleet::python {
 
 namespace {
 
-template <typename T>
-bool take(const py::dict& options, const char* key, T& value) {
-  if (!options.contains(key) || options[key].is_none()) return false;
-  value = options[key].cast<T>();
-  return true;
-}
-
 py::tuple diagnose(const SiteHandle& where, const std::optional<std::string>& log_path,
                    const py::object& arrays, std::uint64_t seed, const py::dict& options,
                    const std::optional<std::string>& json_path, const std::optional<std::string>& out_dir,

@@ -44,14 +44,6 @@ namespace ssrfleet::python {
 
 namespace {
 
-// An option given from Python: None leaves the command's default.
-template <typename T>
-bool take(const py::dict& options, const char* key, T& value) {
-  if (!options.contains(key) || options[key].is_none()) return false;
-  value = options[key].cast<T>();
-  return true;
-}
-
 std::shared_ptr<PosteriorHandle> fit(const SiteHandle& where, const std::optional<std::string>& log_path,
                                      const py::object& arrays, const std::string& method, std::uint64_t seed,
                                      const py::dict& options) {

@@ -39,13 +39,6 @@ struct StreamHandle {
   std::mutex busy;  // one call at a time (the work runs with the GIL released)
 };
 
-template <typename T>
-bool take(const py::dict& options, const char* key, T& value) {
-  if (!options.contains(key) || options[key].is_none()) return false;
-  value = options[key].cast<T>();
-  return true;
-}
-
 std::shared_ptr<StreamHandle> open_stream(const SiteHandle& where, const std::string& state_dir,
                                           std::uint64_t seed, const py::dict& o) {
   auto h = std::make_shared<StreamHandle>();
