@@ -118,10 +118,8 @@ int run_stream(int argc, const char* const argv[]) {
   }
   const site::Site& site = *sites.sites.front();
   const fleet::ModelSpec model = fleet::parse_model_spec(model_text, site);
-  if (model.extension) {
-    options.fit.core = fleet::OnlineFitOptions::default_core(model.extension.get());
-    options.fit.extension = model.extension.get();
-  }
+  options.fit.core = fleet::choose_core(model.extension.get());
+  options.fit.extension = model.extension.get();
   options.fit.sampler().particles = particles;
   options.fit.sampler().threads = threads > 0 ? threads : smc::TemperedSampler::Options::default_threads();
   options.fit.sampler().seed = parse_seed(seed_text);

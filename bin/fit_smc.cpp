@@ -1,11 +1,11 @@
 #include <algorithm>
-#include <chrono>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
 #include <thread>
 #include <filesystem>
 #include <functional>
+#include <optional>
 
 #include <boost/math/distributions/chi_squared.hpp>
 
@@ -77,21 +77,19 @@ void FitFlags::add_to(po::options_description& desc) {
 fleet::OnlineFitOptions online_fit_options(const FitFlags& flags, std::uint64_t seed,
                                            const fleet::ModelExtension* extension) {
   fleet::OnlineFitOptions o;
-  if (flags.core == "latent") {
-    o.core = fleet::OnlineFitOptions::Core::kLatent;
-  } else if (flags.core != "marginal") {
+  if (flags.core != "latent" && flags.core != "marginal") {
     throw UsageError("--core must be marginal or latent, not '" + flags.core + "'");
   }
-  if (extension != nullptr) {
-    // The marginal core carries the base model, stiffness mixtures and one-parameter effects inside
-    // the dynamics (OnlineFitOptions::marginal_carries); the others ride in the latent core's particles.
-    if (flags.core_given && flags.core == "marginal" && !fleet::OnlineFitOptions::marginal_carries(extension)) {
-      throw UsageError("--model " + extension->name() + ": " + fleet::OnlineFitOptions::marginal_refusal(*extension) +
-                       ", or --method mcmc");
-    }
-    if (!flags.core_given) o.core = fleet::OnlineFitOptions::default_core(extension);
-    o.extension = extension;
+  // --core as given (or its default for the base model, which every core carries); a model with
+  // effects takes the core chosen for it unless --core names one.
+  std::optional<fleet::Core> requested;
+  if (flags.core_given || extension == nullptr) requested = flags.core == "latent" ? fleet::Core::kLatent : fleet::Core::kMarginal;
+  try {
+    o.core = fleet::choose_core(extension, requested);
+  } catch (const UsageError& e) {  // the marginal core asked for a model it does not carry
+    throw UsageError("--model " + extension->name() + ": " + e.what() + ", or --method mcmc");
   }
+  o.extension = extension;
   // Under mpirun (ssrfleet-mpi) the ranks share the marginal core's trucks; the latent core keeps
   // every truck's latents in every particle and runs on one process.
   const util::Ranks& ranks = process_ranks();
@@ -152,18 +150,7 @@ std::unique_ptr<fleet::OnlineFit> fit_smc_on(const std::vector<const site::Site*
     if (resumed > 0 && progress) *progress << "fit: resumed from " << checkpoint << " at truck " << resumed << "/" << n << "\n";
   }
   io::check_ranks_agree(ranks, records, resumed);
-  // When the next checkpoint is due: rank 0's clock decides for every rank (they must write together).
-  auto last_checkpoint = std::chrono::steady_clock::now();
-  auto checkpoint_due = [&](std::size_t t) {
-    char due = 0;
-    if (ranks.rank() == 0) {
-      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint).count();
-      due = t + 1 == n || s >= flags.checkpoint_every_s ||
-            (flags.checkpoint_every_trucks > 0 && (t + 1) % static_cast<std::size_t>(flags.checkpoint_every_trucks) == 0);
-    }
-    ranks.broadcast(&due, 1, 0);
-    return due != 0;
-  };
+  io::CheckpointClock checkpoint_clock(ranks, n, flags.checkpoint_every_s, flags.checkpoint_every_trucks);
   if (progress && flags.verbose)
     *progress << "fit: move schedule (" << smc->core() << " core)\n" << smc->sampler().options().schedule.describe();
   fleet::ReplayOptions replay;
@@ -203,7 +190,7 @@ std::unique_ptr<fleet::OnlineFit> fit_smc_on(const std::vector<const site::Site*
     sweeps += stage_sweeps;
     (stage_sweeps > 0 ? moved_stages : plain_stages) += 1;
     (stage_sweeps > 0 ? moved_stage_s : plain_stage_s) += stage.wall_time_s;
-    if (!checkpoint.empty() && checkpoint_due(t)) {
+    if (!checkpoint.empty() && checkpoint_clock.due(t)) {
       // A checkpoint that cannot be written (a full disk) is insurance lost, not the fit: warn and
       // go on (only rank 0 writes, so only it can fail, after its part in the collectives).
       try {
@@ -212,7 +199,7 @@ std::unique_ptr<fleet::OnlineFit> fit_smc_on(const std::vector<const site::Site*
         std::cerr << "ssrfleet fit: warning: checkpoint after truck " << (t + 1) << " not written: " << e.what()
                   << "; the fit goes on (the last checkpoint, if any, is still whole)\n";
       }
-      last_checkpoint = std::chrono::steady_clock::now();
+      checkpoint_clock.restart();
     }
   };
   const fleet::ReplaySummary done = fleet::replay(*smc, records, replay);
@@ -224,11 +211,11 @@ std::unique_ptr<fleet::OnlineFit> fit_smc_on(const std::vector<const site::Site*
   // line). Every rank's table time is gathered first (a collective, so every
   // rank takes part, printing or not).
   std::vector<std::string> each;
-  if (const fleet::MarginalSmc* m = smc->marginal(); m != nullptr && ranks.size() > 1)
-    each = ranks.gather(std::to_string(m->target().table_seconds()), 0);
+  const std::optional<double> table_s = smc->table_seconds();
+  if (table_s && ranks.size() > 1) each = ranks.gather(std::to_string(*table_s), 0);
   const util::Ranks::Traffic sent = ranks.traffic();
-  if (const fleet::MarginalSmc* m = smc->marginal(); m != nullptr && progress) {
-    const double tables = m->target().table_seconds(), total = done.replay_s + done.final_s;
+  if (table_s && progress) {
+    const double tables = *table_s, total = done.replay_s + done.final_s;
     *progress << std::fixed << std::setprecision(2) << "fit: " << ranks.size() << " rank(s) x " << o.sampler().threads
               << " thread(s): " << total << " s, of which tables " << tables << " s (rank 0's trucks), stages and moves "
               << total - tables << " s (" << moved_stages << " truck stages with " << sweeps << " sweeps in all "

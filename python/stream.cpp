@@ -62,10 +62,8 @@ std::shared_ptr<StreamHandle> open_stream(const SiteHandle& where, const std::st
   cli::check_particles(particles);
   if (threads < 0) throw UsageError("threads must be >= 0 (0 = all cores)");
   h->model = fleet::parse_model_spec(model_text, *h->site);
-  if (h->model.extension) {
-    options.fit.core = fleet::OnlineFitOptions::default_core(h->model.extension.get());
-    options.fit.extension = h->model.extension.get();
-  }
+  options.fit.core = fleet::choose_core(h->model.extension.get());
+  options.fit.extension = h->model.extension.get();
   options.fit.sampler().particles = particles;
   options.fit.sampler().threads = threads > 0 ? threads : smc::TemperedSampler::Options::default_threads();
   options.fit.sampler().seed = seed;

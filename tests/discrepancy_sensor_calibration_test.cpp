@@ -98,7 +98,7 @@ TEST_CASE("sensor calibration by Monte Carlo EM recovers a sensor's gain and a s
   }
   // The last fit is on data with the fitted gains divided out.
   REQUIRE(done.fit != nullptr);
-  REQUIRE(done.fit->marginal() != nullptr);
+  CHECK(done.fit->core() == "marginal");
   CHECK(done.fit->trucks_seen() == 160);
 }
 
@@ -106,9 +106,9 @@ TEST_CASE("the M-step's gains do not depend on the thread count, and bad options
   MiscalibratedSites s(30);
   const auto fit = s.fitter()(s.records);
   discrepancy::MarginalDrawOptions o{.draws = 6, .mh_steps = 4, .seed = 3, .threads = 1};
-  const auto one = discrepancy::estimate_sensor_gains(*fit->marginal(), o);
+  const auto one = discrepancy::estimate_sensor_gains(*fit, o);
   o.threads = 2;
-  const auto two = discrepancy::estimate_sensor_gains(*fit->marginal(), o);
+  const auto two = discrepancy::estimate_sensor_gains(*fit, o);
   REQUIRE(one.size() == 2);
   for (std::size_t site = 0; site < 2; ++site) {
     CHECK(one[site].gain == two[site].gain);
@@ -116,7 +116,7 @@ TEST_CASE("the M-step's gains do not depend on the thread count, and bad options
     CHECK(one[site].trucks == 30);
   }
   o.draws = 1;
-  CHECK_THROWS_AS(discrepancy::estimate_sensor_gains(*fit->marginal(), o), UsageError);
+  CHECK_THROWS_AS(discrepancy::estimate_sensor_gains(*fit, o), UsageError);
   discrepancy::CalibrationOptions c;
   c.max_rounds = 0;
   CHECK_THROWS_AS(discrepancy::fit_with_sensor_calibration(s.records, s.ones(), s.fitter(), c), UsageError);

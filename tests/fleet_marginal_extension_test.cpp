@@ -157,18 +157,24 @@ TEST_CASE("the marginal core refuses an effect it does not carry, naming it and 
     fleet::OnlineFitOptions o;
     o.extension = ext.get();
     CHECK_THROWS_WITH(fleet::make_online_fit(as1(), o), Catch::Contains("latent") && Catch::Contains("'" + name + "'"));
-    CHECK(fleet::OnlineFitOptions::default_core(ext.get()) == fleet::OnlineFitOptions::Core::kLatent);
+    CHECK(fleet::choose_core(ext.get()) == fleet::Core::kLatent);
+    CHECK_THROWS_WITH(fleet::choose_core(ext.get(), fleet::Core::kMarginal),
+                      fleet::OnlineFitOptions::marginal_refusal(*ext));
+    CHECK(fleet::choose_core(ext.get(), fleet::Core::kLatent) == fleet::Core::kLatent);
   }
   for (const std::string name : {"second_class", "tyre_damping", "unsprung_mass", "suspension_damping"}) {
     const auto ext = fleet::make_extension(name, as1());
-    CHECK(fleet::OnlineFitOptions::default_core(ext.get()) == fleet::OnlineFitOptions::Core::kMarginal);
+    CHECK(fleet::choose_core(ext.get()) == fleet::Core::kMarginal);
+    CHECK(fleet::choose_core(ext.get(), fleet::Core::kLatent) == fleet::Core::kLatent);
   }
   // speed_bias is carried, but its tables are dear: the latent core by default, the marginal one
   // when asked.
   const auto speed = fleet::make_extension("speed_bias", as1());
-  CHECK(fleet::OnlineFitOptions::default_core(speed.get()) == fleet::OnlineFitOptions::Core::kLatent);
+  CHECK(fleet::choose_core(speed.get()) == fleet::Core::kLatent);
   CHECK(fleet::OnlineFitOptions::marginal_carries(speed.get()));
-  CHECK(fleet::OnlineFitOptions::default_core(nullptr) == fleet::OnlineFitOptions::Core::kMarginal);
+  CHECK(fleet::choose_core(speed.get(), fleet::Core::kMarginal) == fleet::Core::kMarginal);
+  CHECK(fleet::choose_core(nullptr) == fleet::Core::kMarginal);
+  CHECK(fleet::choose_core(nullptr, fleet::Core::kLatent) == fleet::Core::kLatent);
 }
 
 // The marginal core and the exact batch MCMC (no tables), each fitting second_class, on one 50-truck

@@ -30,6 +30,13 @@ namespace {
 
 using Case = test::SimulatedCase;
 
+// The marginal core a fit holds, for what the tests read of it beyond OnlineFit (null on the latent core).
+const fleet::MarginalSmc* marginal_core(const fleet::OnlineFit& fit) {
+  return fleet::visit_core(
+      fit, [](const fleet::FleetSmc&) -> const fleet::MarginalSmc* { return nullptr; },
+      [](const fleet::MarginalSmc& core) { return &core; });
+}
+
 fleet::MarginalSmc::Options options(Eigen::Index particles, int threads, std::uint64_t seed) {
   fleet::MarginalSmc::Options o;  // the defaults `ssrfleet fit` uses
   o.sampler.particles = particles;
@@ -123,7 +130,7 @@ TEST_CASE("tables prebuilt one truck per thread give the bits of tables built on
   fleet::ReplayOptions ro;
   ro.final_sweeps = 0;
   fleet::replay(*replayed_core, records, ro);
-  const auto* replayed = replayed_core->marginal();
+  const auto* replayed = marginal_core(*replayed_core);
   REQUIRE(replayed != nullptr);
 
   // A stream's way: one record at a time, no prebuild, 1 thread; saved and restored mid-span.
@@ -374,7 +381,7 @@ TEST_CASE("the tables check their lateral approximation: within budget on AS1 an
     const auto fit = fleet::make_online_fit(site, o);
     for (const auto& r : log.records) fit->absorb(r);
     *warning = fit->warning();
-    const fleet::MarginalSmc& smc = *fit->marginal();
+    const fleet::MarginalSmc& smc = *marginal_core(*fit);
     CHECK(smc.target().lateral_checked() == 29);  // every truck after the first
     return smc.target().lateral_error_mean();
   };

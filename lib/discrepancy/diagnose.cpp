@@ -10,8 +10,7 @@
 #include <memory>
 #include <sstream>
 
-#include "discrepancy/marginal_draws.hpp"
-#include "discrepancy/posterior_draws.hpp"
+#include "discrepancy/fit_draws.hpp"
 #include "fleet/new_truck_proposals.hpp"
 #include "fleet/online_fit.hpp"
 #include "fleet/replay.hpp"
@@ -28,7 +27,7 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // A fitted SMC together with the extension it points at (which must outlive it). Each model runs on
-// the core `fit` chooses for it (OnlineFitOptions::default_core; docs/inference.md): the base model,
+// the core `fit` chooses for it (fleet::choose_core; docs/inference.md): the base model,
 // second_class and the one-parameter effects inside the dynamics but speed_bias on the marginal
 // core, whose checks draw every truck's latents from their exact conditional given (θ, ψ)
 // (marginal_draws.hpp); the others (a speed bias, a sensor gain, a profile defect, a composition of
@@ -40,11 +39,6 @@ struct Fitted {
   ModelFit fit;
 };
 
-long long integrator_passes(const fleet::OnlineFit& fit) {
-  if (const fleet::FleetSmc* latent = fit.latent()) return latent->target().integrator_passes();
-  return fit.marginal()->target().integrator_passes();
-}
-
 // The fit of one model. An extension's refit on the latent core takes its new trucks' latents from
 // `proposals` (the base fit's tables) when given; a refit on the marginal core needs none (its
 // tables integrate them out). No refit runs final sweeps: finish() runs them on the one chosen.
@@ -54,7 +48,7 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
   Fitted f;
   f.extension = std::move(extension);
   fleet::OnlineFitOptions so;
-  so.core = fleet::OnlineFitOptions::default_core(f.extension.get());
+  so.core = fleet::choose_core(f.extension.get());
   so.sampler().particles = o.particles;
   so.sampler().threads = o.threads;
   so.sampler().seed = o.seed;
@@ -76,7 +70,7 @@ Fitted fit_model(const site::Site& site, const std::vector<records::WimRecord>& 
   fleet::replay(*f.online, records, replay);
   f.fit.log_evidence = f.online->sampler().log_evidence();
   f.fit.wall_s = seconds_since(start);
-  f.fit.integrator_passes = integrator_passes(*f.online);
+  f.fit.integrator_passes = f.online->integrator_passes();
   // The posterior as fit reports it (on the marginal core, the final sweeps' clouds pooled).
   const auto hyper = fleet::summarise_cloud(f.online->cloud());
   std::copy(hyper.begin(), hyper.end(), f.fit.hyper.begin());
@@ -91,7 +85,7 @@ void finish(Fitted& f, const DiagnoseOptions& o) {
   const auto start = Clock::now();
   f.online->rejuvenate(sweeps);
   f.fit.wall_s += seconds_since(start);
-  f.fit.integrator_passes = integrator_passes(*f.online);
+  f.fit.integrator_passes = f.online->integrator_passes();
   const auto hyper = fleet::summarise_cloud(f.online->cloud());
   std::copy(hyper.begin(), hyper.end(), f.fit.hyper.begin());
 }
@@ -110,13 +104,11 @@ CheckReport check(const site::Site& site, const Fitted& f, const DiagnoseOptions
   co.alpha = o.alpha;
   co.replicates = o.replicates;
   co.seed = o.seed;
-  if (const fleet::FleetSmc* latent = f.online->latent())
-    return run_checks(posterior_draws(site, *latent, o.draws, o.seed, o.threads), co);
   MarginalDrawOptions d;
   d.draws = o.draws;
   d.seed = o.seed;
   d.threads = o.threads;
-  return run_checks(posterior_draws(site, *f.online->marginal(), d), co);
+  return run_checks(posterior_draws(site, *f.online, d), co);
 }
 
 std::vector<std::string> matched_checks(const fleet::ModelExtension& ext, const CheckReport& report) {
@@ -291,8 +283,8 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
   say("fitting the base model (" + std::to_string(o.particles) + " particles)");
   const Fitted base = fit_model(site, records, heldout_from, nullptr, nullptr, o);
   // The base fit's tables propose every refit's new trucks (it outlives them all).
-  const fleet::MarginalTableProposals tables(base.online->marginal()->target());
-  const fleet::NewTruckProposals* proposals = o.refit_from_tables ? &tables : nullptr;
+  const std::unique_ptr<fleet::NewTruckProposals> tables = base.online->table_proposals();
+  const fleet::NewTruckProposals* proposals = o.refit_from_tables ? tables.get() : nullptr;
   r.base = base.fit;
   say("posterior predictive checks on the base model");
   r.checks_before = check(site, base, o);

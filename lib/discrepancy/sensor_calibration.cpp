@@ -19,9 +19,7 @@ struct DrawSums {
   double sigma_if = 0.0;
 };
 
-}  // namespace
-
-std::vector<SensorGains> estimate_sensor_gains(const fleet::MarginalSmc& fit, const MarginalDrawOptions& o) {
+std::vector<SensorGains> estimate_gains(const fleet::MarginalSmc& fit, const MarginalDrawOptions& o) {
   if (o.draws < 2) throw UsageError("sensor calibration: draws must be at least 2 (the standard error needs two)");
   if (o.mh_steps < 0) throw UsageError("sensor calibration: mh_steps must be >= 0");
   if (o.threads < 1) throw UsageError("sensor calibration: threads must be at least 1");
@@ -95,6 +93,17 @@ std::vector<SensorGains> estimate_sensor_gains(const fleet::MarginalSmc& fit, co
   return gains;
 }
 
+}  // namespace
+
+std::vector<SensorGains> estimate_sensor_gains(const fleet::OnlineFit& fit, const MarginalDrawOptions& options) {
+  return fleet::visit_core(
+      fit,
+      [](const fleet::FleetSmc&) -> std::vector<SensorGains> {
+        throw UsageError("sensor calibration: the fit must run on the marginal core");
+      },
+      [&](const fleet::MarginalSmc& marginal) { return estimate_gains(marginal, options); });
+}
+
 CalibratedFit fit_with_sensor_calibration(const std::vector<records::WimRecord>& records,
                                           std::vector<Eigen::VectorXd> initial, const FitRecords& fit_records,
                                           const CalibrationOptions& o,
@@ -112,10 +121,9 @@ CalibratedFit fit_with_sensor_calibration(const std::vector<records::WimRecord>&
     std::vector<records::WimRecord> corrected = records;
     for (auto& r : corrected) fleet::remove_sensor_gains(r, out.gains[r.site]);
     out.fit = fit_records(corrected);
-    const fleet::MarginalSmc* marginal = out.fit ? out.fit->marginal() : nullptr;
-    if (marginal == nullptr) throw UsageError("sensor calibration: the fit must run on the marginal core");
+    if (out.fit == nullptr) throw UsageError("sensor calibration: the fit must run on the marginal core");
     CalibrationRound r;
-    r.step = estimate_sensor_gains(*marginal, o.draws);
+    r.step = estimate_sensor_gains(*out.fit, o.draws);  // UsageError if the fit is on another core
     out.se.assign(r.step.size(), Eigen::VectorXd());
     for (std::size_t s = 0; s < r.step.size(); ++s) {
       const SensorGains& g = r.step[s];

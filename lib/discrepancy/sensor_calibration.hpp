@@ -44,8 +44,9 @@ struct SensorGains {
 // The M-step: each site's gains relative to the data the fit saw (1 where it is calibrated already),
 // from options.draws posterior draws of θ with every truck's latents drawn through its own site.
 // One entry per site of the fit's target, in its order; a site without trucks gets gains 1 and an
-// infinite standard error. Same result for any options.threads. UsageError on bad options.
-std::vector<SensorGains> estimate_sensor_gains(const fleet::MarginalSmc& fit, const MarginalDrawOptions& options);
+// infinite standard error. Same result for any options.threads. UsageError on bad options, or if the
+// fit is not on the marginal core (whose tables the latents are drawn from).
+std::vector<SensorGains> estimate_sensor_gains(const fleet::OnlineFit& fit, const MarginalDrawOptions& options);
 
 struct CalibrationOptions {
   int max_rounds = 8;        // fits in all, the first one included

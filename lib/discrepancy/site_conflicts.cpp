@@ -50,7 +50,7 @@ fleet::PosteriorCloud fit_sites(const std::vector<const site::Site*>& sites,
                                 std::vector<std::vector<records::WimRecord>> logs, const SiteConflictOptions& options,
                                 std::uint64_t seed) {
   fleet::OnlineFitOptions o = options.fit;
-  o.core = fleet::OnlineFitOptions::Core::kMarginal;
+  o.core = fleet::choose_core(o.extension, fleet::Core::kMarginal);  // several sites fit on the marginal core
   o.sampler().seed = seed;
   auto fit = fleet::make_online_fit(sites, o);
   fleet::replay(*fit, fleet::merge_site_records(std::move(logs)), {});

@@ -35,7 +35,7 @@ namespace ssrfleet::fleet {
 // edits to the pass (a vehicle constant, the speed) only; no added profile (a pass per node more,
 // not measured), no output edit of a discrete choice (sensor_gain: two parameters), no jump.
 bool carried_by_psi_window(const ModelExtension* extension);
-// Whether a carried extension fits on the marginal core by default (OnlineFitOptions::default_core).
+// Whether a carried extension fits on the marginal core by default (choose_core, online_fit.hpp).
 // speed_bias does not: a scaled speed moves each pass's timing along the whole array, its tables keep
 // 600-690 entries against about 100 for tyre_damping, and a 12-truck fit with a factor of 1.1 ran
 // for minutes on the marginal core against seconds on the latent one. It still fits on the marginal

@@ -24,6 +24,7 @@ class CoreFit : public OnlineFit {
   const smc::TemperedSampler& sampler() const override { return smc_.sampler(); }
   void save(BinaryWriter& out) const override { smc_.save(out); }
   void restore(BinaryReader& in) override { smc_.restore(in); }
+  long long integrator_passes() const override { return smc_.target().integrator_passes(); }
 
  protected:
   Core smc_;
@@ -37,7 +38,16 @@ class MarginalFit final : public CoreFit<MarginalSmc> {
   std::string note() const override {
     return smc_.last_rebuild().empty() ? "" : "tables rebuilt (" + smc_.last_rebuild() + ")";
   }
-  const MarginalSmc* marginal() const override { return &smc_; }
+  void visit_core(CoreVisitor& visitor) const override { visitor.on_marginal(smc_); }
+  std::optional<double> table_seconds() const override { return smc_.target().table_seconds(); }
+  bool holds_record(std::size_t i, const records::WimRecord& r) const override {
+    const AbsorbedTrucks& a = smc_.target().absorbed();
+    return a.site(i) == r.site && a.speed_mps(i) == r.speed_mps && a.sprung_mass_kg(i) == r.sprung_mass_kg &&
+           a.impact_factors(i).size() == r.impact_factor.size() && a.impact_factors(i) == r.impact_factor;
+  }
+  std::unique_ptr<NewTruckProposals> table_proposals() const override {
+    return std::make_unique<MarginalTableProposals>(smc_.target());
+  }
   std::string warning() const override {
     const double e = smc_.target().lateral_error_mean();
     if (!(e > MarginalSmc::kLateralErrorWarning)) return "";
@@ -65,7 +75,7 @@ class LatentFit final : public CoreFit<FleetSmc> {
     if (record.site != 0) throw UsageError("the latent core fits one site; several sites need the marginal core");
     return smc_.absorb(record);
   }
-  const FleetSmc* latent() const override { return &smc_; }
+  void visit_core(CoreVisitor& visitor) const override { visitor.on_latent(smc_); }
 };
 
 }  // namespace
@@ -81,14 +91,24 @@ std::string OnlineFitOptions::marginal_refusal(const ModelExtension& extension) 
          "effects are not yet carried: fit it on the latent core (--core latent, the default for this model)";
 }
 
+Core choose_core(const ModelExtension* extension, std::optional<Core> requested) {
+  if (requested) {
+    if (*requested == Core::kMarginal && !OnlineFitOptions::marginal_carries(extension)) {
+      throw UsageError(OnlineFitOptions::marginal_refusal(*extension));
+    }
+    return *requested;
+  }
+  if (!OnlineFitOptions::marginal_carries(extension)) return Core::kLatent;
+  const bool windowed = extension != nullptr && carried_by_psi_window(extension);
+  return !windowed || psi_window_by_default(extension) ? Core::kMarginal : Core::kLatent;
+}
+
 std::unique_ptr<OnlineFit> make_online_fit(const std::vector<const site::Site*>& sites, const OnlineFitOptions& options) {
   if (sites.empty()) throw UsageError("make_online_fit: no site");
   if (options.core == OnlineFitOptions::Core::kMarginal) {
     std::string why;
     if (!options.marginal.sampler.IsValid(&why)) throw UsageError(why);
-    if (!OnlineFitOptions::marginal_carries(options.extension)) {
-      throw UsageError(OnlineFitOptions::marginal_refusal(*options.extension));
-    }
+    choose_core(options.extension, options.core);  // UsageError if the marginal core does not carry the model
     MarginalSmc::Options marginal = options.marginal;
     marginal.target.extension = options.extension;
     return std::make_unique<MarginalFit>(sites, marginal);

@@ -149,18 +149,26 @@ std::size_t read_fit_checkpoint(const std::string& path, fleet::OnlineFit& fit,
     const std::string id = fit.truck_id(i);
     if (id != records[i].truck_id) refuse(i, "id '" + id + "' against the log's '" + records[i].truck_id + "'");
   }
-  if (const fleet::MarginalSmc* m = fit.marginal()) {
-    const auto& t = m->target();
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto& r = records[i];
-      const fleet::AbsorbedTrucks& a = t.absorbed();
-      if (a.site(i) != r.site || a.speed_mps(i) != r.speed_mps || a.sprung_mass_kg(i) != r.sprung_mass_kg ||
-          a.impact_factors(i).size() != r.impact_factor.size() || a.impact_factors(i) != r.impact_factor) {
-        refuse(i, "its data differ from the log's");
-      }
-    }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!fit.holds_record(i, records[i])) refuse(i, "its data differ from the log's");
   }
   return n;
 }
+
+CheckpointClock::CheckpointClock(const util::Ranks& ranks, std::size_t trucks, double every_s, long every_trucks)
+    : ranks_(ranks), trucks_(trucks), every_s_(every_s), every_trucks_(every_trucks), last_(Clock::now()) {}
+
+bool CheckpointClock::due(std::size_t t) {
+  char due = 0;
+  if (ranks_.rank() == 0) {
+    const double s = std::chrono::duration<double>(Clock::now() - last_).count();
+    due = t + 1 == trucks_ || s >= every_s_ ||
+          (every_trucks_ > 0 && (t + 1) % static_cast<std::size_t>(every_trucks_) == 0);
+  }
+  ranks_.broadcast(&due, 1, 0);
+  return due != 0;
+}
+
+void CheckpointClock::restart() { last_ = Clock::now(); }
 
 }  // namespace ssrfleet::io

@@ -12,6 +12,7 @@
 // process would write). The ranks must see DIR on a shared file system.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -49,5 +50,25 @@ std::size_t read_fit_checkpoint(const std::string& path, fleet::OnlineFit& fit,
 // resumed from the same truck (a log appended to, or a checkpoint written, while the ranks started
 // would otherwise split the ranks' work into different runs).
 void check_ranks_agree(const util::Ranks& ranks, const std::vector<records::WimRecord>& records, std::size_t resumed);
+
+// When a fit of `trucks` trucks writes its next checkpoint: after the last truck, once `every_s`
+// seconds of fitting have passed since the last one, and every `every_trucks` trucks (0: by time
+// only). The ranks must write together, so rank 0's clock decides for all of them.
+class CheckpointClock {
+ public:
+  CheckpointClock(const util::Ranks& ranks, std::size_t trucks, double every_s, long every_trucks);
+  // Collective: whether a checkpoint is due after truck t (0-based); the same answer on every rank.
+  bool due(std::size_t t);
+  // Counts the seconds again from now (call it after each checkpoint, written or not).
+  void restart();
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  const util::Ranks& ranks_;
+  std::size_t trucks_;
+  double every_s_;
+  long every_trucks_;
+  Clock::time_point last_;
+};
 
 }  // namespace ssrfleet::io

@@ -61,7 +61,7 @@ fleet::PosteriorCloud stream_fit(const site::Site& site, const std::vector<recor
                                  const std::function<void(std::size_t, const fleet::OnlineFit&)>& after_each) {
   fleet::OnlineFitOptions so;  // the core `fit` chooses for the model
   const fleet::ModelSpec model = fleet::parse_model_spec(o.model, site);
-  so.core = fleet::OnlineFitOptions::default_core(model.extension.get());
+  so.core = fleet::choose_core(model.extension.get());
   so.extension = model.extension.get();
   so.sampler().particles = o.particles;
   so.sampler().threads = o.threads > 0 ? o.threads : smc::TemperedSampler::Options::default_threads();
