@@ -28,9 +28,10 @@ void FitFlags::add_to(po::options_description& desc) {
   smc.add_options()
       ("model", po::value(&model)->value_name("SPEC")->default_value(model),
        "the model to fit: base, or effects joined by '+', each NAME or NAME:param=value,... (a parameter given is "
-       "fixed, one left out is fitted), e.g. tyre_damping+sensor_gain:sensor=11; second_class, tyre_damping, unsprung_mass and "
-       "suspension_damping fit on the marginal core, the others and compositions on the latent core (speed_bias "
-       "also on the marginal core with --core marginal; ssrfleet effects lists them)")
+       "fixed, one left out is fitted), e.g. tyre_damping+sensor_gain:sensor=11; second_class, tyre_damping, unsprung_mass, "
+       "suspension_damping and a gain on a given sensor (sensor_gain:sensor=N) fit on the marginal core, the others "
+       "and compositions on the latent core (speed_bias also on the marginal core with --core marginal; ssrfleet "
+       "effects lists them)")
       ("core", po::value(&core)->value_name("CORE")->default_value(core),
        "inference core: marginal (each truck's latents integrated out in a table built on arrival; IBIS over the "
        "7 hyperparameters, cost per truck flat in n) or latent (every truck's latents in every particle; cost per "

@@ -13,6 +13,8 @@
 
 #include "discrepancy/diagnose.hpp"
 #include "discrepancy/diagnose_report.hpp"
+#include "fleet/online_fit.hpp"
+#include "fleet/replay.hpp"
 #include "fleet/simulator.hpp"
 #include "model/fleet_distribution.hpp"
 #include "model/model_extension.hpp"
@@ -82,11 +84,34 @@ TEST_CASE("diagnose names a 6 % gain on sensor 9 of a 40-truck log and closes th
   auto o = options(256, 3);
   o.candidates = {"sensor_gain", "tyre_damping", "speed_bias"};
   o.shortlist_only = true;
-  const auto r = discrepancy::diagnose(as1(), hidden_effect_log(setting, 40, 3), o);
+  const auto records = hidden_effect_log(setting, 40, 3);
+  const auto r = discrepancy::diagnose(as1(), records, o);
   require_found(r, setting);
   // The per-sensor check found where: sensor 9.
   CHECK(r.checks_before.checks[static_cast<int>(fleet::CheckKind::kSensorMean)].flagged);
   CHECK(r.checks_before.checks[static_cast<int>(fleet::CheckKind::kSensorMean)].sensor == 9);
+  // The gain was refitted with the sensor fixed where the checks point, on the flat-cost core, and
+  // its evidence is that fit's less log 16, the fixed sensor's prior mass: the same fit run here.
+  CHECK(r.model == "sensor_gain:sensor=9");
+  const auto gain = std::find_if(r.candidates.begin(), r.candidates.end(), [](const auto& c) { return c.name == "sensor_gain"; });
+  REQUIRE(gain != r.candidates.end());
+  REQUIRE(gain->parameters.size() == 2);
+  CHECK(gain->parameters[0].name == "sensor");
+  CHECK(gain->parameters[0].posterior.mean == 9.0);
+  CHECK(gain->parameters[0].posterior.sd == 0.0);
+  const auto fixed = fleet::parse_model_spec("sensor_gain:sensor=9", as1());
+  fleet::OnlineFitOptions so;
+  so.core = fleet::choose_core(fixed.extension.get());
+  CHECK(so.core == fleet::Core::kMarginal);
+  so.sampler().particles = o.particles;
+  so.sampler().threads = o.threads;
+  so.sampler().seed = o.seed;
+  so.extension = fixed.extension.get();
+  auto direct = fleet::make_online_fit(as1(), so);
+  fleet::ReplayOptions replay;
+  replay.final_sweeps = 0;
+  fleet::replay(*direct, records, replay);
+  CHECK(gain->fit.log_evidence == Approx(direct->sampler().log_evidence() - std::log(16.0)).epsilon(1e-12));
   // Candidates whose signature has no failed check are reported, not refitted.
   for (const auto& c : r.candidates) {
     INFO(c.name);
@@ -263,7 +288,9 @@ TEST_CASE("diagnose names two effects hidden at once, one after the other, and t
   CHECK(std::find(r.effects.begin(), r.effects.end(), "unsprung_mass") != r.effects.end());
   CHECK(r.effect == r.effects.front());
   CHECK(r.verdict == "explained");
-  CHECK(r.model == r.effects[0] + "+" + r.effects[1]);
+  // The model names the gain's sensor, fixed where the checks pointed.
+  const auto spec_of = [](const std::string& effect) { return effect == "sensor_gain" ? effect + ":sensor=9" : effect; };
+  CHECK(r.model == spec_of(r.effects[0]) + "+" + spec_of(r.effects[1]));
   CHECK(r.posterior.model == r.model);
   // Each step's gap is smaller than the one before, and the last one is a right model's.
   REQUIRE(r.steps.size() >= 2);
@@ -282,6 +309,7 @@ TEST_CASE("diagnose names two effects hidden at once, one after the other, and t
   CHECK(find("unsprung_mass.m1").q975 >= 600.0);
   CHECK(find("sensor_gain.gain").q025 <= 1.06);
   CHECK(find("sensor_gain.gain").q975 >= 1.06);
+  CHECK(find("sensor_gain.sensor").mean == 9.0);
 }
 
 // A first effect can hide a second from the checks: with a 5 % gain on sensor 5 and tyre damping of

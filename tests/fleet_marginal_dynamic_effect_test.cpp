@@ -21,6 +21,7 @@
 #include "fleet/simulator.hpp"
 #include "model/fleet_distribution.hpp"
 #include "model/model_extension.hpp"
+#include "model/model_spec.hpp"
 #include "model/psi_grid.hpp"
 #include "model/truck_table.hpp"
 #include "site/road_source.hpp"
@@ -37,9 +38,12 @@ const site::Site& as1() {
   return site;
 }
 
-// The four effects at the sizes of the latent core's cross-sampler test.
+// The four effects at the sizes of the latent core's cross-sampler test, and a gain on one sensor
+// with the sensor fixed (one continuous parameter that acts after the dynamics), keyed by the
+// model spec that fits them.
 const std::map<std::string, std::string>& hidden_effects() {
   static const std::map<std::string, std::string> settings = {
+      {"sensor_gain:sensor=5", "sensor_gain:sensor=5,gain=1.05"},
       {"speed_bias", "speed_bias:factor=1.05"},
       {"suspension_damping", "suspension_damping:c_b=35000"},
       {"tyre_damping", "tyre_damping:c_t=2000"},
@@ -72,10 +76,11 @@ using test::restore_from;
 
 }  // namespace
 
-TEST_CASE("the four effects inside the dynamics are carried by a psi window, the others are not",
+TEST_CASE("the four effects inside the dynamics and a gain on a fixed sensor are carried by a psi window, the others are not",
           "[marginal][extension]") {
   for (const auto& [name, setting] : hidden_effects()) {
-    const auto ext = fleet::make_extension(name, as1());
+    const auto ext = fleet::parse_model_spec(name, as1()).extension;
+    INFO(name);
     CHECK(fleet::carried_by_psi_window(ext.get()));
   }
   for (const std::string name : {"sensor_gain", "profile_defect", "second_class"}) {
@@ -83,6 +88,34 @@ TEST_CASE("the four effects inside the dynamics are carried by a psi window, the
     CHECK_FALSE(fleet::carried_by_psi_window(ext.get()));
   }
   CHECK_FALSE(fleet::carried_by_psi_window(nullptr));
+}
+
+// The cap on the interpolant's rise (marginal_psi_window.cpp): a smooth ℓ(ψ) is interpolated as the
+// Lagrange polynomial gives it, while node values far apart (ℓ steep in ψ at a θ far from the
+// posterior) cannot swing it far above every node.
+TEST_CASE("the psi window's interpolant follows a smooth likelihood and cannot swing above steep nodes",
+          "[marginal][extension]") {
+  const model::PsiGrid g(0.9, 1.1, 5, model::PsiGrid::Kind::kChebyshev);
+  std::vector<double> smooth(5), steep(5);
+  const auto quadratic = [](double psi) { return -40.0 - 2.0e3 * (psi - 1.013) * (psi - 1.013); };
+  for (int q = 0; q < 5; ++q) {
+    const double x = g.nodes()[static_cast<std::size_t>(q)];
+    smooth[static_cast<std::size_t>(q)] = quadratic(x);
+    // A steep, non-polynomial profile: a drop of 1e4 nats over the window's last fifth.
+    steep[static_cast<std::size_t>(q)] = x > 1.06 ? -1.0e4 : -5.0;
+  }
+  double top = -std::numeric_limits<double>::infinity(), bottom = -top;
+  for (double v : steep) top = std::max(top, v), bottom = std::min(bottom, v);
+  double lagrange_max = -std::numeric_limits<double>::infinity();
+  for (double psi = 0.9; psi <= 1.1; psi += 0.001) {
+    // A quadratic is a polynomial of degree < 5: interpolated exactly, the cap never binding.
+    CHECK(fleet::interpolate_node_sums(g, psi, smooth.data(), 1) == Approx(quadratic(psi)).epsilon(1e-12));
+    const double capped = fleet::interpolate_node_sums(g, psi, steep.data(), 1);
+    CHECK(capped <= top + 0.05 * (top - bottom) + 1e-9);
+    lagrange_max = std::max(lagrange_max, g.interpolate(steep.data(), psi));
+  }
+  // The uncapped polynomial does swing far above the nodes there: the cap is what holds it.
+  CHECK(lagrange_max > top + 0.05 * (top - bottom));
 }
 
 TEST_CASE("a linear psi grid interpolates by hat functions, exact for straight lines",
@@ -121,10 +154,10 @@ TEST_CASE("a linear psi grid interpolates by hat functions, exact for straight l
 // 2.2e-3 of the direct table (this test's first run, which held single trucks to 1e-3).
 TEST_CASE("the psi window's interpolated likelihood matches tables built at psi off its nodes",
           "[marginal][extension][heavy]") {
-  for (const std::string name : {"tyre_damping", "speed_bias"}) {
+  for (const std::string name : {"tyre_damping", "speed_bias", "sensor_gain:sensor=5"}) {
     DYNAMIC_SECTION(name) {
       const auto records = hidden_effect_log(name, 40, 11);
-      const auto ext = fleet::make_extension(name, as1());
+      const auto ext = fleet::parse_model_spec(name, as1()).extension;
       fleet::MarginalSmc smc(as1(), options(256, 3, 2, ext.get()));
       for (const auto& r : records) smc.absorb(r);
       const fleet::MarginalTarget& target = smc.target();
@@ -327,7 +360,7 @@ TEST_CASE("the marginal core and the batch MCMC agree on each dynamic effect's p
   for (const auto& [name, setting] : hidden_effects()) {
     DYNAMIC_SECTION(name) {
       const auto records = hidden_effect_log(name, kTrucks, 2024);
-      const auto ext = fleet::make_extension(name, as1());
+      const auto ext = fleet::parse_model_spec(name, as1()).extension;
       const Eigen::Index d = ext->dim(), J = fleet::kHyperCount + d;
       const auto t0 = std::chrono::steady_clock::now();
       std::vector<Eigen::MatrixXd> states;

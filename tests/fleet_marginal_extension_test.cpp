@@ -18,6 +18,7 @@
 #include "fleet/simulator.hpp"
 #include "model/fleet_distribution.hpp"
 #include "model/model_extension.hpp"
+#include "model/model_spec.hpp"
 #include "site/road_source.hpp"
 #include "site/site.hpp"
 #include "util/binary_io.hpp"
@@ -167,6 +168,12 @@ TEST_CASE("the marginal core refuses an effect it does not carry, naming it and 
     CHECK(fleet::choose_core(ext.get()) == fleet::Core::kMarginal);
     CHECK(fleet::choose_core(ext.get(), fleet::Core::kLatent) == fleet::Core::kLatent);
   }
+  // A gain on a given sensor is carried too (a gain with its sensor free is not), on the marginal
+  // core by default.
+  const auto gain = fleet::parse_model_spec("sensor_gain:sensor=5", as1()).extension;
+  CHECK(fleet::OnlineFitOptions::marginal_carries(gain.get()));
+  CHECK(fleet::choose_core(gain.get()) == fleet::Core::kMarginal);
+  CHECK(fleet::choose_core(gain.get(), fleet::Core::kLatent) == fleet::Core::kLatent);
   // speed_bias is carried, but its tables are dear: the latent core by default, the marginal one
   // when asked.
   const auto speed = fleet::make_extension("speed_bias", as1());

@@ -8,7 +8,9 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
+#include <utility>
 
 #include "discrepancy/fit_draws.hpp"
 #include "fleet/new_truck_proposals.hpp"
@@ -28,11 +30,11 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 
 // A fitted SMC together with the extension it points at (which must outlive it). Each model runs on
 // the core `fit` chooses for it (fleet::choose_core; docs/inference.md): the base model,
-// second_class and the one-parameter effects inside the dynamics but speed_bias on the marginal
-// core, whose checks draw every truck's latents from their exact conditional given (θ, ψ)
-// (marginal_draws.hpp); the others (a speed bias, a sensor gain, a profile defect, a composition of
-// effects) on the latent core, which
-// carries ψ in its particles and re-simulates every kept truck when ψ moves.
+// second_class, the one-parameter effects inside the dynamics and a gain on the sensor the checks
+// point at (candidate_spec) on the marginal core, whose checks draw every truck's latents from
+// their exact conditional given (θ, ψ) (marginal_draws.hpp); a profile defect and compositions of
+// effects on the latent core, which carries ψ in its particles and re-simulates every kept truck
+// when ψ moves.
 struct Fitted {
   std::unique_ptr<fleet::ModelExtension> extension;
   std::unique_ptr<fleet::OnlineFit> online;
@@ -162,11 +164,55 @@ struct Round {
   std::vector<std::string> alternatives;
   Fitted best;  // online is null when no candidate is supported
   std::string effect;
+  std::string effect_spec;       // the effect as the model spec writes it (a sensor fixed: "sensor_gain:sensor=5")
+  double effect_log_mass = 0.0;  // its fixed sensor's log prior mass (0 with none fixed)
+  std::optional<ParameterEstimate> effect_fixed;  // that sensor, as a parameter of the report
   double log_bayes_factor = 0.0, heldout_gain = 0.0;
 };
 
+// How a candidate is refitted. An effect with a parameter that names a sensor (sensor_gain) has it
+// fixed at the sensor that its own signature's checks point at (the smallest p-value among them),
+// and the rest fitted: with one continuous parameter left, the flat-cost core carries it, where the
+// sensor free (a discrete choice) needs the latent core, whose cost per truck grows with n. The
+// fixed model's evidence p(y | s) bounds the full model's, (1/M) Σ_s p(y | s), from below once
+// log M (the sensor's prior mass under the uniform prior) is taken off, and equals it when the data
+// single out that sensor: so the bound never favours the effect on a clean log, where the checks'
+// worst sensor is chance (the held-out score reads the same trucks the checks did, so its gain is
+// slightly optimistic there; the evidence decides first).
+struct CandidateSpec {
+  std::string text;            // the effect's model spec
+  double log_prior_mass = 0.0; // added to the fixed model's log evidence
+  std::optional<ParameterEstimate> fixed;
+};
+
+// A fixed parameter as the report names the fitted ones: effect.param in a composition of effects.
+ParameterEstimate named_in(ParameterEstimate p, const std::string& effect, bool composed) {
+  if (composed) p.name = effect + "." + p.name;
+  return p;
+}
+
+CandidateSpec candidate_spec(const fleet::ModelExtension& alone, const CheckReport& checks, int sensors) {
+  CandidateSpec out{alone.name(), 0.0, std::nullopt};
+  const int j = alone.sensor_parameter();
+  if (j < 0) return out;
+  const auto signature = alone.signature();
+  const CheckResult* pointer = nullptr;
+  for (const auto& c : checks.checks) {
+    if (std::find(signature.begin(), signature.end(), c.kind) == signature.end()) continue;
+    if (c.sensor < 1 || c.sensor > sensors) continue;
+    if (pointer == nullptr || c.p_value < pointer->p_value) pointer = &c;
+  }
+  if (pointer == nullptr) return out;
+  const auto& p = alone.parameters()[static_cast<std::size_t>(j)];
+  out.text = alone.name() + ":" + p.name + "=" + std::to_string(pointer->sensor);
+  out.log_prior_mass = -std::log(static_cast<double>(sensors));
+  const double s = pointer->sensor;
+  out.fixed = ParameterEstimate{p.name, p.unit, p.null_value, {s, 0.0, s, s}};
+  return out;
+}
+
 Round next_effect(const site::Site& site, const std::vector<records::WimRecord>& records, std::size_t heldout_from,
-                  const Fitted& current, const std::string& spec, std::vector<std::string> names,
+                  const Fitted& current, const std::string& spec, double spec_log_mass, std::vector<std::string> names,
                   const CheckReport& checks, const fleet::NewTruckProposals* proposals, const DiagnoseOptions& o,
                   const std::function<void(const std::string&)>& say) {
   Round out;
@@ -177,6 +223,7 @@ Round next_effect(const site::Site& site, const std::vector<records::WimRecord>&
                    [&](const std::string& a, const std::string& b) { return shortlisted[a] && !shortlisted[b]; });
   std::vector<Fitted> supported;  // refits that pass both tests, parallel to supported_index
   std::vector<std::size_t> supported_index;
+  std::vector<CandidateSpec> supported_specs;
   const std::string against = spec.empty() ? "the base model" : spec;
   for (const auto& name : names) {
     util::throw_if_stopped();
@@ -190,14 +237,17 @@ Round next_effect(const site::Site& site, const std::vector<records::WimRecord>&
       out.candidates.push_back(std::move(c));
       continue;
     }
-    const std::string model = spec.empty() ? name : spec + "+" + name;
+    const CandidateSpec cs = candidate_spec(*alone, checks, site.sensors());
+    const std::string model = spec.empty() ? cs.text : spec + "+" + cs.text;
     say("refitting with " + model);
     Fitted f = fit_model(site, records, heldout_from, fleet::parse_model_spec(model, site).extension, proposals, o);
+    f.fit.log_evidence += spec_log_mass + cs.log_prior_mass;  // the full model's, sensors free (candidate_spec)
     c.refitted = true;
     c.fit = f.fit;
     c.log_bayes_factor = f.fit.log_evidence - current.fit.log_evidence;
     c.heldout_gain = f.fit.heldout_log_score - current.fit.heldout_log_score;
     c.parameters = extension_estimates(f);
+    if (cs.fixed) c.parameters.insert(c.parameters.begin(), named_in(*cs.fixed, name, !spec.empty()));
     say("  " + model + ": log Bayes factor " + fmt(c.log_bayes_factor, 1) + " against " + against + ", held-out gain " +
         fmt(c.heldout_gain, 1));
     if (c.log_bayes_factor < o.min_log_bayes_factor) {
@@ -207,6 +257,7 @@ Round next_effect(const site::Site& site, const std::vector<records::WimRecord>&
     } else {
       supported.push_back(std::move(f));
       supported_index.push_back(out.candidates.size());
+      supported_specs.push_back(cs);
     }
     out.candidates.push_back(std::move(c));
   }
@@ -225,10 +276,13 @@ Round next_effect(const site::Site& site, const std::vector<records::WimRecord>&
   if (chosen == supported.size()) return out;
   auto& pick = out.candidates[supported_index[chosen]];
   out.effect = pick.name;
+  out.effect_spec = supported_specs[chosen].text;
+  out.effect_log_mass = supported_specs[chosen].log_prior_mass;
+  out.effect_fixed = supported_specs[chosen].fixed;
   out.log_bayes_factor = pick.log_bayes_factor;
   out.heldout_gain = pick.heldout_gain;
   out.best = std::move(supported[chosen]);
-  say("final sweeps of " + (spec.empty() ? out.effect : spec + "+" + out.effect));
+  say("final sweeps of " + (spec.empty() ? out.effect_spec : spec + "+" + out.effect_spec));
   finish(out.best, o);
   for (std::size_t k = 0; k < supported.size(); ++k) {
     auto& c = out.candidates[supported_index[k]];
@@ -300,6 +354,8 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
   // gain is still strong), and only the evidence and held-out skill of each remaining effect on top
   // of the chosen model can tell. It ends when no candidate is supported, or at max_effects.
   std::string spec;  // the current model's effects ("" = base)
+  double spec_log_mass = 0.0;  // the log prior mass of the sensors fixed in spec (candidate_spec)
+  std::vector<std::pair<std::string, ParameterEstimate>> spec_fixed;  // and those sensors by effect, for the report
   Fitted extended;   // the model with the effects named so far (online null: the base model)
   const auto current_fit = [&]() -> const Fitted& { return extended.online ? extended : base; };
   CheckReport current_checks = r.checks_before;
@@ -315,7 +371,8 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
                                                      ": weighing each remaining effect on top of it");
     }
     const auto round_start = Clock::now();
-    Round next = next_effect(site, records, heldout_from, current_fit(), spec, remaining, current_checks, proposals, o, say);
+    Round next = next_effect(site, records, heldout_from, current_fit(), spec, spec_log_mass, remaining, current_checks,
+                             proposals, o, say);
     if (round == 0) {
       r.candidates = next.candidates;
       r.alternatives = next.alternatives;
@@ -327,7 +384,9 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
       r.steps.push_back(std::move(step));
       break;
     }
-    spec = spec.empty() ? next.effect : spec + "+" + next.effect;
+    spec = spec.empty() ? next.effect_spec : spec + "+" + next.effect_spec;
+    spec_log_mass += next.effect_log_mass;
+    if (next.effect_fixed) spec_fixed.emplace_back(next.effect, *next.effect_fixed);
     r.effects.push_back(next.effect);
     extended = std::move(next.best);
     say("posterior predictive checks with " + spec);
@@ -351,7 +410,9 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
   r.posterior = current.online->cloud();
   if (current.extension) {
     r.description = current.extension->description();
-    r.parameters = extension_estimates(current);
+    for (const auto& [effect, p] : spec_fixed) r.parameters.push_back(named_in(p, effect, r.effects.size() > 1));
+    const auto fitted = extension_estimates(current);
+    r.parameters.insert(r.parameters.end(), fitted.begin(), fitted.end());
     r.log_bayes_factor = current.fit.log_evidence - r.base.log_evidence;
     r.heldout_gain = current.fit.heldout_log_score - r.base.heldout_log_score;
   }

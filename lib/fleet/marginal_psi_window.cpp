@@ -10,19 +10,32 @@ namespace ssrfleet::fleet {
 namespace {
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 
+// How far the interpolant may rise above its highest node, as a share of the nodes' spread (max -
+// min). A smooth ℓ(ψ) rises less: a concave quadratic on Q = 5 Chebyshev nodes peaks at most 0.022
+// of the spread above its best node (the nodes' widest gap is 0.29 of the window, and the farthest
+// node at least half the window away). A polynomial through nodes that span thousands of nats (a
+// θ far from the posterior, where ℓ changes steeply with ψ, e.g. small σ_IF under a sensor's gain)
+// swings far above every node in between: a target that rises without bound there draws the
+// tempering's particles away and stalls it (a 4-truck fit with a 1.05 gain took steps of 1e-9 in
+// the temperature). The cap leaves a smooth ℓ alone and holds such swings to that of a quadratic.
+constexpr double kMaxRiseShare = 0.05;
+
 template <class Value>
 double interpolate(const model::PsiGrid& grid, double psi, const Value& value_at) {
   if (!grid.contains(psi)) return kNegInf;
   std::array<double, kMaxPsiNodes> w{};
   grid.weights(psi, w.data());
   double s = 0.0;
+  double top = kNegInf, bottom = -kNegInf;
   for (int q = 0; q < grid.size(); ++q) {
     if (w[static_cast<std::size_t>(q)] == 0.0) continue;  // at a node the others' weights are exactly 0
     const double v = value_at(static_cast<std::size_t>(q));
     if (!std::isfinite(v)) return kNegInf;
     s += w[static_cast<std::size_t>(q)] * v;
+    top = std::max(top, v);
+    bottom = std::min(bottom, v);
   }
-  return s;
+  return std::min(s, top + kMaxRiseShare * (top - bottom));
 }
 }  // namespace
 

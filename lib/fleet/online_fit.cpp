@@ -87,8 +87,8 @@ std::unique_ptr<OnlineFit> make_online_fit(const site::Site& site, const OnlineF
 std::string OnlineFitOptions::marginal_refusal(const ModelExtension& extension) {
   return "model '" + extension.name() + "' is not carried by the marginal core, which fits the base model, second_class "
          "and the one-parameter effects inside the dynamics (tyre_damping, unsprung_mass, suspension_damping, "
-         "speed_bias); a sensor's gain (a discrete sensor and a gain), a profile defect and compositions of several "
-         "effects are not yet carried: fit it on the latent core (--core latent, the default for this model)";
+         "speed_bias) and a gain on a given sensor (sensor_gain:sensor=N); a gain with the sensor free (a discrete "
+         "choice), a profile defect and compositions of several effects are not yet carried: fit it on the latent core (--core latent, the default for this model)";
 }
 
 Core choose_core(const ModelExtension* extension, std::optional<Core> requested) {

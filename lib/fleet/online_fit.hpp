@@ -6,7 +6,7 @@
 //                       table; cost per truck flat in n (docs/inference.md);
 //   latent              FleetSmc: every truck's latents in every particle, older trucks re-swept
 //                       per truck (cost grows with n); needed for the effects the marginal core
-//                       does not carry (marginal_carries: a sensor gain, a profile defect and
+//                       does not carry (marginal_carries: a gain with its sensor free, a profile defect and
 //                       compositions of several effects).
 // Which core a model fits on is decided in one place, choose_core. Callers see the core through
 // OnlineFit's methods alone; what only one core can give (posterior draws of every truck's
@@ -104,8 +104,9 @@ struct OnlineFitOptions {
   // Whether the marginal core carries a model: the base model, extensions that change the fleet's
   // stiffness distribution alone (their mixture reweights the tables' nodes exactly), and
   // one-parameter effects inside the dynamics (tables at the nodes of a ψ window,
-  // marginal_psi_window.hpp). A discrete choice (sensor_gain), an added profile (profile_defect)
-  // and compositions of several effects need the latent core.
+  // marginal_psi_window.hpp), a gain on a given sensor among them. A discrete choice (sensor_gain
+  // with its sensor free), an added profile (profile_defect) and compositions of several effects
+  // need the latent core.
   static bool marginal_carries(const ModelExtension* extension) {
     return extension == nullptr || !extension->edits_forward() || carried_by_psi_window(extension);
   }

@@ -146,6 +146,13 @@ class ModelExtension {
   // values (the box's width for ψ itself): the scale both samplers start or floor their walks at.
   std::vector<double> move_coordinate_spans() const;
 
+  // Optional: the index of a parameter that names one of the site's sensors (a whole number in
+  // [1, M], its box [0.5, M + 0.5]), or -1. The per-sensor posterior predictive checks point at a
+  // sensor, so `diagnose` can fix such a parameter there and fit the rest on the flat-cost core
+  // (the fixed model's evidence, less log M for the sensor's prior mass, bounds the full model's
+  // from below).
+  virtual int sensor_parameter() const { return -1; }
+
   Eigen::Index dim() const { return static_cast<Eigen::Index>(parameters().size()); }
   bool in_prior(const double* psi) const;
   // The uniform prior's log density (the normalised box), -inf outside.

@@ -40,7 +40,9 @@ def test_diagnose_gives_the_commands_report(diagnosed, tmp_path):
     # The report's parts a user reads first, and the posterior it ends with (the command's file).
     assert [c["name"] for c in got["candidates"]] == ["sensor_gain"]
     assert got["model"] == expected["model"] and got["verdict"] == expected["verdict"]
-    assert got.posterior.info()["model"] == (got["effect"] if got["effect"] != "none" else "base")
+    # The posterior is the chosen model's, a gain's sensor fixed where the checks point.
+    assert got.posterior.info()["model"] == got["model"]
+    assert got["model"] == ("sensor_gain:sensor=3" if got["effect"] == "sensor_gain" else "base")
     with open(ends) as a, open(tmp_path / "ends.json") as b:
         assert a.read() == b.read()
 

@@ -18,6 +18,7 @@ class SensorGain final : public ModelExtension {
   std::string description() const override { return "one sensor's calibration gain differs from 1"; }
   const std::vector<ExtensionParameter>& parameters() const override { return params_; }
   std::vector<CheckKind> signature() const override { return {CheckKind::kSensorMean, CheckKind::kSensorDispersion}; }
+  int sensor_parameter() const override { return 0; }
   void edit_output(const double* psi, Eigen::Ref<Eigen::ArrayXd> impact_factor) const override {
     impact_factor[sensor_index(psi[0])] *= psi[1];
   }
