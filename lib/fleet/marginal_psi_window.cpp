@@ -10,15 +10,19 @@ namespace ssrfleet::fleet {
 namespace {
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 
-// How far the interpolant may rise above its highest node, as a share of the nodes' spread (max -
-// min). A smooth ℓ(ψ) rises less: a concave quadratic on Q = 5 Chebyshev nodes peaks at most 0.022
-// of the spread above its best node (the nodes' widest gap is 0.29 of the window, and the farthest
-// node at least half the window away). A polynomial through nodes that span thousands of nats (a
-// θ far from the posterior, where ℓ changes steeply with ψ, e.g. small σ_IF under a sensor's gain)
-// swings far above every node in between: a target that rises without bound there draws the
-// tempering's particles away and stalls it (a 4-truck fit with a 1.05 gain took steps of 1e-9 in
-// the temperature). The cap leaves a smooth ℓ alone and holds such swings to that of a quadratic.
+// How far the interpolant may rise above its highest node: a share of the nodes' spread (max - min),
+// and at most a few nats. A smooth ℓ(ψ) rises less: a concave quadratic on Q = 5 Chebyshev nodes
+// peaks at most 0.022 of the spread above its best node (the nodes' widest gap is 0.29 of the
+// window, and the farthest node at least half the window away), so under 2 nats wherever the nodes
+// span under 90 nats, as they do across the window near the posterior (it spans ±6 posterior sd,
+// about 18 nats at its edges). A polynomial through nodes that span thousands of nats (a θ far from
+// the posterior, where ℓ changes steeply with ψ, e.g. small σ_IF under a sensor's gain) swings far
+// above every node in between. A target that rises without bound there draws the tempering's
+// particles away and stalls it (a 4-truck fit with a 1.05 gain took temperature steps of 1e-9);
+// one that rises hundreds of nats (the share alone: 5 % of 1e4) makes a false mode the cloud can
+// settle in (a 4-truck suspension_damping fit then met its 4th truck at ℓ = -2.6e10).
 constexpr double kMaxRiseShare = 0.05;
+constexpr double kMaxRiseNats = 2.0;
 
 template <class Value>
 double interpolate(const model::PsiGrid& grid, double psi, const Value& value_at) {
@@ -35,7 +39,7 @@ double interpolate(const model::PsiGrid& grid, double psi, const Value& value_at
     top = std::max(top, v);
     bottom = std::min(bottom, v);
   }
-  return std::min(s, top + kMaxRiseShare * (top - bottom));
+  return std::min(s, top + std::min(kMaxRiseShare * (top - bottom), kMaxRiseNats));
 }
 }  // namespace
 
