@@ -158,18 +158,6 @@ std::string where_misfit_sits(const CheckReport& report, int sensors, double alp
   return s;
 }
 
-// One round of the search: the current model plus each candidate, refitted; the one added (if any).
-struct Round {
-  std::vector<CandidateResult> candidates;
-  std::vector<std::string> alternatives;
-  Fitted best;  // online is null when no candidate is supported
-  std::string effect;
-  std::string effect_spec;       // the effect as the model spec writes it (a sensor fixed: "sensor_gain:sensor=5")
-  double effect_log_mass = 0.0;  // its fixed sensor's log prior mass (0 with none fixed)
-  std::optional<ParameterEstimate> effect_fixed;  // that sensor, as a parameter of the report
-  double log_bayes_factor = 0.0, heldout_gain = 0.0;
-};
-
 // How a candidate is refitted. An effect with a parameter that names a sensor (sensor_gain) has it
 // fixed at the sensor that its own signature's checks point at (the smallest p-value among them),
 // and the rest fitted: with one continuous parameter left, the flat-cost core carries it, where the
@@ -183,6 +171,16 @@ struct CandidateSpec {
   std::string text;            // the effect's model spec
   double log_prior_mass = 0.0; // added to the fixed model's log evidence
   std::optional<ParameterEstimate> fixed;
+};
+
+// One round of the search: the current model plus each candidate, refitted; the one added (if any).
+struct Round {
+  std::vector<CandidateResult> candidates;
+  std::vector<std::string> alternatives;
+  Fitted best;  // online is null when no candidate is supported
+  std::string effect;
+  CandidateSpec effect_spec;  // how it was fitted (a sensor fixed: "sensor_gain:sensor=5")
+  double log_bayes_factor = 0.0, heldout_gain = 0.0;
 };
 
 // A fixed parameter as the report names the fitted ones: effect.param in a composition of effects.
@@ -276,13 +274,11 @@ Round next_effect(const site::Site& site, const std::vector<records::WimRecord>&
   if (chosen == supported.size()) return out;
   auto& pick = out.candidates[supported_index[chosen]];
   out.effect = pick.name;
-  out.effect_spec = supported_specs[chosen].text;
-  out.effect_log_mass = supported_specs[chosen].log_prior_mass;
-  out.effect_fixed = supported_specs[chosen].fixed;
+  out.effect_spec = supported_specs[chosen];
   out.log_bayes_factor = pick.log_bayes_factor;
   out.heldout_gain = pick.heldout_gain;
   out.best = std::move(supported[chosen]);
-  say("final sweeps of " + (spec.empty() ? out.effect_spec : spec + "+" + out.effect_spec));
+  say("final sweeps of " + (spec.empty() ? out.effect_spec.text : spec + "+" + out.effect_spec.text));
   finish(out.best, o);
   for (std::size_t k = 0; k < supported.size(); ++k) {
     auto& c = out.candidates[supported_index[k]];
@@ -384,9 +380,9 @@ DiagnoseResult diagnose(const site::Site& site, const std::vector<records::WimRe
       r.steps.push_back(std::move(step));
       break;
     }
-    spec = spec.empty() ? next.effect_spec : spec + "+" + next.effect_spec;
-    spec_log_mass += next.effect_log_mass;
-    if (next.effect_fixed) spec_fixed.emplace_back(next.effect, *next.effect_fixed);
+    spec = spec.empty() ? next.effect_spec.text : spec + "+" + next.effect_spec.text;
+    spec_log_mass += next.effect_spec.log_prior_mass;
+    if (next.effect_spec.fixed) spec_fixed.emplace_back(next.effect, *next.effect_spec.fixed);
     r.effects.push_back(next.effect);
     extended = std::move(next.best);
     say("posterior predictive checks with " + spec);
